@@ -1,0 +1,133 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The user-facing description of a switched system (paper Section II):
+// K modes visited in order k = 0..K-1 (the paper's k = 1..K), each with its own
+// state dimension n_k, a common input dimension m, dynamics f_k, a reset g_k
+// into the next mode, and an optional switching surface h_k.
+#ifndef DDOC_SWITCHED_SYSTEM_H_
+#define DDOC_SWITCHED_SYSTEM_H_
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace ddoc {
+
+using Vector = Eigen::VectorXd;
+using Matrix = Eigen::MatrixXd;
+using ConstVectorRef = Eigen::Ref<const Eigen::VectorXd>;
+using VectorRef = Eigen::Ref<Eigen::VectorXd>;
+using ConstMatrixRef = Eigen::Ref<const Eigen::MatrixXd>;
+using MatrixRef = Eigen::Ref<Eigen::MatrixXd>;
+
+/// Thrown on invalid user input. The message names the offending quantity,
+/// its expected and actual value, e.g. "Flow(k=1): x has size 9, expected 10".
+class InvalidArgument : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+/// A switched system with K modes visited in a fixed sequence (paper eq. (1)-(3)).
+///
+///   xdot = f_k(x, u),            t in [T_{k-1}, T_k],   x in R^{n_k}, u in R^m   (1)
+///   x^+(T_k) = g_k(x^-(T_k)),    g_k : R^{n_k} -> R^{n_{k+1}}                     (2)
+///   h_k(x^-(T_k)) = 0            optional, R^{n_k} -> R^{s_k}                      (3)
+///
+/// Mode indices are zero-based here. For k < K-1, g_k maps mode k into mode k+1.
+/// g_{K-1} (the "cycle reset") maps the last mode back into mode 0; it is optional,
+/// never differentiated by the engine, and used only by plants that repeat the
+/// sequence (a hopper hops again). A system without a cycle reset reports
+/// has_cycle_reset() == false.
+///
+/// Public methods check sizes and finiteness in one place and then call the
+/// protected virtual Do... methods, which subclasses implement (Drake's pattern).
+/// The checks are O(n) and allocation-free, so the engine calls the public
+/// methods inside its hot loops.
+class SwitchedSystem {
+ public:
+  virtual ~SwitchedSystem() = default;
+
+  /// K, the number of modes in the sequence.
+  int num_modes() const { return static_cast<int>(state_dims_.size()); }
+  /// m, the input dimension (shared by all modes).
+  int input_dim() const { return input_dim_; }
+  /// n_k, the state dimension of mode k.
+  int state_dim(int k) const;
+  /// s_k, the dimension of the switching surface h_k at the end of mode k (0 = none).
+  int surface_dim(int k) const;
+  /// n_max = max_k n_k.
+  int max_state_dim() const;
+  /// True when g_{K-1} (last mode -> mode 0) is implemented.
+  bool has_cycle_reset() const { return has_cycle_reset_; }
+
+  /// xdot = f_k(x, u). xdot must have size n_k.
+  void Flow(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef xdot) const;
+  /// fx = df_k/dx (n_k x n_k), fu = df_k/du (n_k x m).
+  void FlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, MatrixRef fx,
+                       MatrixRef fu) const;
+  /// x_next = g_k(x), x_next in R^{n_{(k+1) mod K}}.
+  void Reset(int k, const ConstVectorRef& x, VectorRef x_next) const;
+  /// gx = dg_k/dx, n_{(k+1) mod K} x n_k (rectangular when the dimensions differ).
+  void ResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const;
+  /// h = h_k(x) in R^{s_k}. Only for s_k > 0.
+  void Surface(int k, const ConstVectorRef& x, VectorRef h) const;
+  /// hx = dh_k/dx, s_k x n_k. Only for s_k > 0.
+  void SurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const;
+
+ protected:
+  /// state_dims: n_k for each mode (non-empty, each > 0); input_dim: m > 0;
+  /// surface_dims: s_k for each mode (empty means all zero).
+  SwitchedSystem(std::vector<int> state_dims, int input_dim, std::vector<int> surface_dims = {},
+                 bool has_cycle_reset = false);
+
+  virtual void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                      VectorRef xdot) const = 0;
+  virtual void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                                 MatrixRef fx, MatrixRef fu) const = 0;
+  virtual void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const = 0;
+  virtual void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const = 0;
+  virtual void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const;
+  virtual void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const;
+
+ private:
+  std::vector<int> state_dims_;    // n_k, size K
+  std::vector<int> surface_dims_;  // s_k, size K
+  int input_dim_ = 0;              // m
+  bool has_cycle_reset_ = false;
+};
+
+/// Running costs l_k(x, u) and switching costs phi_k(x^-(T_k)) of problem (4).
+/// phi_{K-1} is the terminal cost. The surface penalty w_k ||h_k||^2 of (8) is NOT
+/// part of this class: the engine adds it from SwitchedSystem::Surface and the
+/// weights in Problem, so that I4-type penalties are reported separately.
+///
+/// Same check/Do split as SwitchedSystem. All derivatives are dense.
+class SwitchedCost {
+ public:
+  virtual ~SwitchedCost() = default;
+
+  /// l_k(x, u).
+  double Running(int k, const ConstVectorRef& x, const ConstVectorRef& u) const;
+  /// lx (n_k), lu (m), lxx (n_k x n_k), luu (m x m), lux (m x n_k).
+  void RunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
+                          VectorRef lu, MatrixRef lxx, MatrixRef luu, MatrixRef lux) const;
+  /// phi_k(x), evaluated at x^-(T_k).
+  double Switching(int k, const ConstVectorRef& x) const;
+  /// phix (n_k), phixx (n_k x n_k).
+  void SwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix, MatrixRef phixx) const;
+
+ protected:
+  virtual double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const = 0;
+  virtual void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                                    VectorRef lx, VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                                    MatrixRef lux) const = 0;
+  virtual double DoSwitching(int k, const ConstVectorRef& x) const = 0;
+  virtual void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                                      MatrixRef phixx) const = 0;
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_SWITCHED_SYSTEM_H_

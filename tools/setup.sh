@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Idempotent setup for a fresh Debian 12 machine: apt-get update, Debian packages, configure, build.
+# Safe to run again: apt skips what is installed and CMake rebuilds only what changed.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev libmujoco-dev libosmesa6-dev libtinyxml2-dev liblodepng-dev libcli11-dev
+  libbenchmark-dev libgtest-dev googletest
+  ffmpeg python3-matplotlib
+)
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${packages[@]}" >/dev/null
+
+build_dir=${DDOC_BUILD_DIR:-"$here/build"}
+cmake -S "$here" -B "$build_dir" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build_dir" -j"$(nproc)"
