@@ -1,0 +1,101 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The output files of one ddoc-hopper run (formats in README "Output formats").
+// Every file is flushed as it grows, and summary.json is rewritten after every hop,
+// so a run that falls keeps everything up to the fall.
+#ifndef DDOC_APP_RUN_LOG_H_
+#define DDOC_APP_RUN_LOG_H_
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "scenario.h"
+
+namespace ddoc::app {
+
+/// One row of hops.csv: one hop is one iteration (trial) of Algorithm 1.
+struct HopRecord {
+  int hop = 0;               // 0-based
+  double t_start = 0.0;      // takeoff time starting the hop [s]
+  double t_end = 0.0;        // next takeoff [s]
+  double cost = 0.0;         // I = I1 + I2 + I3 + I4 of (42), measured
+  double i1 = 0.0, i2 = 0.0, i3 = 0.0, i4 = 0.0;
+  double t1 = 0.0;           // flight duration [s]
+  double t2 = 0.0;           // hop period [s]
+  double step_length = 0.0;  // distance between consecutive touchdown feet [m]
+  double speed = 0.0;        // mean forward speed over the hop [m/s]
+  double apex = 0.0;         // max COM height in flight [m]
+  double alpha = 0.0;        // line-search parameter of this trial
+  bool accepted = false;     // (36) held
+  double du2 = 0.0;          // integral |du|^2 dtau
+  double dt2 = 0.0;          // |dT|^2
+};
+
+/// One row of trajectory.csv.
+struct SampleRecord {
+  double t = 0.0;
+  int hop = 0;
+  int phase = 0;             // 0 flight, 1 stance
+  double q[14] = {};         // x,y,theta,phi,r,k_hip,k_leg and rates (flight coordinates)
+  double u[4] = {};          // applied input
+  double push = 0.0;         // external horizontal force [N]
+};
+
+struct EventRecord {
+  double t = 0.0;
+  int hop = 0;
+  std::string type;          // touchdown|takeoff|push_start|push_end|fall
+  double x = 0.0, y = 0.0, xd = 0.0, yd = 0.0;
+};
+
+struct Summary {
+  std::string scenario, method, robot, model;
+  int hops = 0;
+  bool fell = false;
+  std::string fall_reason;
+  int converged_hop = -1;    // -1: not converged
+  double final_cost = 0.0, final_i4 = 0.0, mean_speed = 0.0, mean_period = 0.0;
+  double wall_time_s = 0.0;
+  double sim_time_s = 0.0;
+  int accepted = 0, rejected = 0;
+  std::vector<Push> pushes;
+};
+
+/// Opens DIR/{hops,trajectory,events}.csv (creating DIR) and writes the headers.
+class RunLog {
+ public:
+  /// Throws std::runtime_error naming the path when the directory cannot be created
+  /// or a file cannot be opened.
+  explicit RunLog(const std::string& dir, std::string method);
+  ~RunLog();
+  RunLog(const RunLog&) = delete;
+  RunLog& operator=(const RunLog&) = delete;
+
+  /// Appends and flushes a hop row.
+  void WriteHop(const HopRecord& hop);
+  /// Appends a sample; flushed at the next hop or event.
+  void WriteSample(const SampleRecord& sample);
+  /// Appends and flushes an event (flushes the trajectory too).
+  void WriteEvent(const EventRecord& event);
+  /// Rewrites summary.json atomically (write to a temporary file, then rename).
+  void WriteSummary(const Summary& summary);
+  /// Flushes everything.
+  void Flush();
+
+  const std::string& dir() const { return dir_; }
+
+ private:
+  std::string dir_;
+  std::string method_;
+  std::FILE* hops_ = nullptr;
+  std::FILE* trajectory_ = nullptr;
+  std::FILE* events_ = nullptr;
+};
+
+/// Escapes a string for JSON.
+std::string JsonEscape(const std::string& text);
+
+}  // namespace ddoc::app
+
+#endif  // DDOC_APP_RUN_LOG_H_

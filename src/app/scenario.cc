@@ -1,0 +1,181 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "scenario.h"
+
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+namespace ddoc::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void Fail(const std::string& file, int line, const std::string& what) {
+  std::ostringstream msg;
+  msg << "scenario " << (file.empty() ? "<flags>" : file);
+  if (line > 0) msg << ":" << line;
+  msg << ": " << what;
+  throw ScenarioError(msg.str());
+}
+
+// Reads an optional double attribute; a present but non-numeric value is an error.
+std::optional<double> OptionalDouble(const std::string& file, const tinyxml2::XMLElement* e,
+                                     const char* attr) {
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return std::nullopt;
+  double value = 0.0;
+  if (e->QueryDoubleAttribute(attr, &value) != tinyxml2::XML_SUCCESS || !std::isfinite(value)) {
+    Fail(file, e->GetLineNum(),
+         "<" + std::string(e->Name()) + "> attribute " + attr + "=\"" + text +
+             "\" is not a finite number");
+  }
+  return value;
+}
+
+double RequiredDouble(const std::string& file, const tinyxml2::XMLElement* e, const char* attr) {
+  auto value = OptionalDouble(file, e, attr);
+  if (!value) {
+    Fail(file, e->GetLineNum(),
+         "<" + std::string(e->Name()) + "> is missing attribute " + attr);
+  }
+  return *value;
+}
+
+std::string ResolvePath(const std::string& scenario_file, const char* path) {
+  fs::path p(path);
+  if (p.is_absolute() || scenario_file.empty()) return p.lexically_normal().string();
+  return (fs::path(scenario_file).parent_path() / p).lexically_normal().string();
+}
+
+}  // namespace
+
+Method ParseMethod(const std::string& name) {
+  if (name == "alg1") return Method::kAlg1;
+  if (name == "ocfb") return Method::kOcfb;
+  if (name == "mrl") return Method::kMrl;
+  throw ScenarioError("unknown method \"" + name + "\" (expected alg1, ocfb or mrl)");
+}
+
+const char* MethodName(Method method) {
+  switch (method) {
+    case Method::kAlg1: return "alg1";
+    case Method::kOcfb: return "ocfb";
+    case Method::kMrl: return "mrl";
+  }
+  return "?";
+}
+
+Scenario LoadScenario(const std::string& path) {
+  if (!fs::exists(path)) Fail(path, 0, "file does not exist");
+  tinyxml2::XMLDocument doc;
+  if (doc.LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) {
+    Fail(path, doc.ErrorLineNum(), std::string("malformed XML: ") + doc.ErrorStr());
+  }
+  const tinyxml2::XMLElement* root = doc.RootElement();
+  if (root == nullptr || std::string(root->Name()) != "ddoc_scenario") {
+    Fail(path, root ? root->GetLineNum() : 0, "the root element must be <ddoc_scenario>");
+  }
+
+  Scenario s;
+  s.file = path;
+  s.name = root->Attribute("name") ? root->Attribute("name")
+                                   : fs::path(path).stem().string();
+
+  for (const tinyxml2::XMLElement* e = root->FirstChildElement(); e != nullptr;
+       e = e->NextSiblingElement()) {
+    const std::string tag = e->Name();
+    const int line = e->GetLineNum();
+    if (tag == "robot") {
+      const char* mjcf = e->Attribute("mjcf");
+      if (mjcf == nullptr) Fail(path, line, "<robot> is missing attribute mjcf");
+      s.robot_mjcf = ResolvePath(path, mjcf);
+    } else if (tag == "model") {
+      if (const char* mjcf = e->Attribute("mjcf")) s.model_mjcf = ResolvePath(path, mjcf);
+      s.model_numbers.mass = OptionalDouble(path, e, "M");
+      s.model_numbers.j_body = OptionalDouble(path, e, "J_body");
+      s.model_numbers.j_leg = OptionalDouble(path, e, "J_leg");
+      s.model_numbers.r0 = OptionalDouble(path, e, "r0");
+      s.model_numbers.drag = OptionalDouble(path, e, "c_d");
+      s.model_numbers.beta = OptionalDouble(path, e, "beta");
+      s.model_numbers.gravity = OptionalDouble(path, e, "g");
+    } else if (tag == "method") {
+      const char* name = e->Attribute("name");
+      if (name == nullptr) Fail(path, line, "<method> is missing attribute name");
+      try {
+        s.method = ParseMethod(name);
+      } catch (const ScenarioError& err) {
+        Fail(path, line, err.what());
+      }
+    } else if (tag == "duration") {
+      if (auto hops = OptionalDouble(path, e, "hops")) {
+        if (*hops != std::floor(*hops)) Fail(path, line, "<duration> hops must be an integer");
+        s.hops = static_cast<int>(*hops);
+      } else {
+        s.hops = 0;
+      }
+      s.seconds = OptionalDouble(path, e, "seconds").value_or(0.0);
+    } else if (tag == "push") {
+      Push p;
+      p.time = RequiredDouble(path, e, "time");
+      p.force = RequiredDouble(path, e, "force");
+      p.duration = RequiredDouble(path, e, "duration");
+      s.pushes.push_back(p);
+    } else if (tag == "gait") {
+      s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
+    } else {
+      Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
+                       "duration, push or gait)");
+    }
+  }
+  std::sort(s.pushes.begin(), s.pushes.end(),
+            [](const Push& a, const Push& b) { return a.time < b.time; });
+  ValidateScenario(s);
+  return s;
+}
+
+void ValidateScenario(const Scenario& s) {
+  const std::string& f = s.file;
+  if (s.robot_mjcf.empty()) Fail(f, 0, "no robot MJCF given (<robot mjcf=...>)");
+  if (!fs::is_regular_file(s.robot_mjcf)) {
+    Fail(f, 0, "robot MJCF \"" + s.robot_mjcf + "\" does not exist");
+  }
+  if (!s.model_mjcf.empty() && !fs::is_regular_file(s.model_mjcf)) {
+    Fail(f, 0, "model MJCF \"" + s.model_mjcf + "\" does not exist");
+  }
+  if (s.hops < 0) Fail(f, 0, "hops must be >= 0, got " + std::to_string(s.hops));
+  if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) Fail(f, 0, "seconds must be >= 0");
+  if (s.hops == 0 && s.seconds == 0.0) Fail(f, 0, "give a number of hops or of seconds");
+  auto positive = [&](const std::optional<double>& v, const char* name) {
+    if (v && !(*v > 0.0)) Fail(f, 0, std::string("model ") + name + " must be > 0");
+  };
+  positive(s.model_numbers.mass, "M");
+  positive(s.model_numbers.j_body, "J_body");
+  positive(s.model_numbers.j_leg, "J_leg");
+  positive(s.model_numbers.r0, "r0");
+  positive(s.model_numbers.beta, "beta");
+  positive(s.model_numbers.gravity, "g");
+  if (s.model_numbers.drag && *s.model_numbers.drag < 0.0) Fail(f, 0, "model c_d must be >= 0");
+  for (const Push& p : s.pushes) {
+    if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
+    if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");
+  }
+}
+
+Push ParsePush(const std::string& text) {
+  Push p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> p.time >> c1 >> p.force >> c2 >> p.duration) || c1 != ',' || c2 != ',' ||
+      !in.eof() && (in >> std::ws, !in.eof())) {
+    throw ScenarioError("--push \"" + text + "\": expected TIME,FORCE,DURATION");
+  }
+  if (!(p.time >= 0.0) || !(p.duration > 0.0) || !std::isfinite(p.force)) {
+    throw ScenarioError("--push \"" + text + "\": time must be >= 0 and duration > 0");
+  }
+  return p;
+}
+
+}  // namespace ddoc::app

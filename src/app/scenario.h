@@ -1,0 +1,73 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Scenario files for ddoc-hopper: which robot, which model, which method, how long,
+// and which pushes. Parsing lives here, at the edge; the engine never sees XML.
+#ifndef DDOC_APP_SCENARIO_H_
+#define DDOC_APP_SCENARIO_H_
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace ddoc::app {
+
+/// A bad scenario file or flag. The message names the file, the line and the element.
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The three methods of Section V, all run by the same engine (see README).
+enum class Method { kAlg1, kOcfb, kMrl };
+
+/// "alg1" | "ocfb" | "mrl"; throws ScenarioError naming the bad value.
+Method ParseMethod(const std::string& name);
+const char* MethodName(Method method);
+
+/// A horizontal push on the body's COM: force [N] during [time, time + duration) [s].
+struct Push {
+  double time = 0.0;      // start, simulated seconds
+  double force = 0.0;     // horizontal force [N], + is forward (+x)
+  double duration = 0.1;  // [s], > 0
+};
+
+/// Model parameters given as numbers (Table I); unset fields keep the defaults of
+/// the analytic hopper. Used when the scenario has no model MJCF.
+struct ModelNumbers {
+  std::optional<double> mass;     // M [kg]
+  std::optional<double> j_body;   // J_body [kg m^2]
+  std::optional<double> j_leg;    // J_leg [kg m^2]
+  std::optional<double> r0;       // natural leg length [m]
+  std::optional<double> drag;     // c_d [kg/m]
+  std::optional<double> beta;     // VSA bandwidth [rad/s]
+  std::optional<double> gravity;  // g [m/s^2]
+};
+
+/// Everything one run needs. Paths are absolute or relative to the current directory
+/// (relative paths in the file are resolved against the scenario file's folder).
+struct Scenario {
+  std::string name;                  // label used in logs and plots
+  std::string file;                  // the scenario file itself ("" when built from flags)
+  std::string robot_mjcf;            // the true robot (required)
+  std::string model_mjcf;            // the model as an MJCF ("" = use model_numbers)
+  ModelNumbers model_numbers;        // the model as numbers
+  Method method = Method::kAlg1;     // alg1 | ocfb | mrl
+  int hops = 100;                    // stop after this many hops (0 = use seconds)
+  double seconds = 0.0;              // stop after this simulated time (0 = use hops)
+  std::vector<Push> pushes;          // in time order
+  double forward_speed = 0.0;        // desired mean forward speed of the nominal gait [m/s]
+};
+
+/// Reads a scenario file; throws ScenarioError naming the file, line and element.
+Scenario LoadScenario(const std::string& path);
+
+/// Checks ranges and files (robot/model MJCF exist, hops/seconds, pushes). Throws ScenarioError.
+void ValidateScenario(const Scenario& scenario);
+
+/// Parses "time,force,duration" (a --push flag). Throws ScenarioError.
+Push ParsePush(const std::string& text);
+
+}  // namespace ddoc::app
+
+#endif  // DDOC_APP_SCENARIO_H_

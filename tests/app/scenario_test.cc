@@ -1,0 +1,142 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "scenario.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "run_log.h"
+
+namespace ddoc::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ScenarioTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ddoc_scenario_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "robot.xml") << "<mujoco/>";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Write(const std::string& text) {
+    const fs::path p = dir_ / "s.xml";
+    std::ofstream(p) << text;
+    return p.string();
+  }
+
+  // Expects LoadScenario to throw with a message containing every needle.
+  void ExpectError(const std::string& text, std::initializer_list<const char*> needles) {
+    const std::string path = Write(text);
+    try {
+      LoadScenario(path);
+      FAIL() << "no error for:\n" << text;
+    } catch (const ScenarioError& e) {
+      for (const char* needle : needles) {
+        EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
+            << "message \"" << e.what() << "\" lacks \"" << needle << "\"";
+      }
+    }
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(ScenarioTest, ParsesEveryElementAndResolvesPathsAgainstTheFile) {
+  const std::string path = Write(R"(<ddoc_scenario name="x">
+      <robot mjcf="robot.xml"/>
+      <model M="10" c_d="0" beta="25"/>
+      <method name="mrl"/>
+      <duration hops="7"/>
+      <push time="3" force="25" duration="0.2"/>
+      <push time="1" force="-20" duration="0.1"/>
+      <gait speed="0.5"/>
+    </ddoc_scenario>)");
+  const Scenario s = LoadScenario(path);
+  EXPECT_EQ(s.name, "x");
+  EXPECT_EQ(fs::path(s.robot_mjcf), (dir_ / "robot.xml").lexically_normal());
+  EXPECT_EQ(s.method, Method::kMrl);
+  EXPECT_EQ(s.hops, 7);
+  ASSERT_TRUE(s.model_numbers.mass.has_value());
+  EXPECT_DOUBLE_EQ(*s.model_numbers.mass, 10.0);
+  EXPECT_DOUBLE_EQ(*s.model_numbers.drag, 0.0);
+  EXPECT_DOUBLE_EQ(*s.model_numbers.beta, 25.0);
+  EXPECT_FALSE(s.model_numbers.j_leg.has_value());
+  ASSERT_EQ(s.pushes.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.pushes[0].force, -20.0);  // sorted by time
+  EXPECT_DOUBLE_EQ(s.pushes[1].force, 25.0);
+  EXPECT_DOUBLE_EQ(s.forward_speed, 0.5);
+}
+
+TEST_F(ScenarioTest, BadInputNamesTheProblem) {
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/>", {"s.xml", "malformed XML"});
+  ExpectError("<scenario/>", {"<ddoc_scenario>"});
+  ExpectError("<ddoc_scenario><model M='10'/></ddoc_scenario>", {"no robot MJCF"});
+  ExpectError("<ddoc_scenario><robot mjcf='nope.xml'/></ddoc_scenario>", {"nope.xml", "does not exist"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><method name='ppo'/></ddoc_scenario>",
+              {"ppo", "alg1"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><model M='ten'/></ddoc_scenario>",
+              {":1", "<model>", "M=\"ten\""});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><model M='-1'/></ddoc_scenario>", {"M must be > 0"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><push time='1' force='2'/></ddoc_scenario>",
+              {"<push>", "duration"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><push time='1' force='2' duration='0'/></ddoc_scenario>",
+              {"push duration must be > 0"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><duration hops='0'/></ddoc_scenario>",
+              {"hops or of seconds"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><wind/></ddoc_scenario>", {"<wind>"});
+  EXPECT_THROW(LoadScenario((dir_ / "missing.xml").string()), ScenarioError);
+}
+
+TEST(ParsePushTest, AcceptsTripletsOnly) {
+  const Push p = ParsePush("2.5,-20,0.2");
+  EXPECT_DOUBLE_EQ(p.time, 2.5);
+  EXPECT_DOUBLE_EQ(p.force, -20.0);
+  EXPECT_DOUBLE_EQ(p.duration, 0.2);
+  EXPECT_THROW(ParsePush("2.5,-20"), ScenarioError);
+  EXPECT_THROW(ParsePush("2.5;-20;0.2"), ScenarioError);
+  EXPECT_THROW(ParsePush("1,2,0"), ScenarioError);
+  EXPECT_THROW(ParsePush("1,2,3,4"), ScenarioError);
+}
+
+TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
+  const fs::path dir = fs::temp_directory_path() / "ddoc_runlog_test";
+  fs::remove_all(dir);
+  {
+    RunLog log(dir.string(), "alg1");
+    HopRecord h;
+    h.hop = 3;
+    h.cost = 1.5;
+    h.accepted = true;
+    log.WriteHop(h);
+    // Written before the log is closed: a run that dies keeps its rows.
+    std::ifstream in(dir / "hops.csv");
+    std::string header, row;
+    std::getline(in, header);
+    std::getline(in, row);
+    EXPECT_EQ(header.substr(0, 18), "hop,t_start,t_end,");
+    EXPECT_EQ(row.substr(0, 2), "3,");
+    EXPECT_NE(row.find(",1,"), std::string::npos);
+    Summary s;
+    s.scenario = "a\"b";
+    s.final_cost = std::nan("");
+    log.WriteSummary(s);
+    std::ifstream js(dir / "summary.json");
+    const std::string text((std::istreambuf_iterator<char>(js)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("\"a\\\"b\""), std::string::npos);
+    EXPECT_NE(text.find("\"final_cost\": null"), std::string::npos);
+  }
+  fs::remove_all(dir);
+  EXPECT_THROW(RunLog("/proc/ddoc_cannot_write_here", "alg1"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace ddoc::app
