@@ -353,7 +353,7 @@ def converged_hop(hops, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I):
     if delta_i < 1:
         raise ValueError(f"delta_i must be >= 1, got {delta_i}")
     streak = 0
-    for k in range(len(hops)):
+    for k in range(len(hops["hop"])):
         if not hops["accepted"][k] > 0.5:
             continue
         d = hops["du2"][k] + hops["dT2"][k]

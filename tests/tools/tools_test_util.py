@@ -1,0 +1,43 @@
+"""Shared helpers of the tests of the Python result tools (tools/*.py, tools/reproduce)."""
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+TOOLS = os.path.join(ROOT, "tools")
+TESTDATA = os.path.join(TOOLS, "testdata")
+RUNS = ("exact_m8_alg1", "inexact_m8_ocfb", "push_m12_alg1")  # the synthetic runs
+PYTHON = "/usr/bin/python3"  # Debian's interpreter, the one with matplotlib
+
+sys.path.insert(0, TOOLS)
+
+
+def run_tool(*args, cwd=None):
+    """Run a tool (path relative to tools/) with Debian's python; returns CompletedProcess."""
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg")
+    script = os.path.join(TOOLS, args[0])
+    return subprocess.run([PYTHON, script, *args[1:]], capture_output=True, text=True, env=env,
+                          cwd=cwd, timeout=300)
+
+
+def run_dir(name):
+    return os.path.join(TESTDATA, name)
+
+
+class TempDirTest(unittest.TestCase):
+    """Gives each test a fresh temporary directory self.tmp (removed afterwards)."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="ddoc_tools_test_")
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def copy_run(self, name, new_name=None):
+        dst = os.path.join(self.tmp, new_name or name)
+        shutil.copytree(run_dir(name), dst)
+        return dst
