@@ -378,6 +378,7 @@ PANEL_FILES = {
     "e": "fig2e_step_length.png",
     "all": "fig2.png",
 }
+MOTION_MAX_HOPS = 8       # panel (a) 'auto' range shows at most this many hops
 BODY_SIZE = (0.30, 0.12)  # drawn body rectangle [m]: length along the body axis x height
 LINESTYLES = {"alg1": "-", "ocfb": "--", "mrl": ":"}
 
@@ -450,8 +451,9 @@ def draw_motion(ax, run, color, hop_range, snap_every):
         if ps:
             first = int(time_to_hop(run, ps[0][0]))
             last = int(time_to_hop(run, ps[-1][1]))
-            hop_range = slice(max(int(np.searchsorted(hops_present, first)) - 1, 0),
-                              int(np.searchsorted(hops_present, last)) + 3)
+            a = max(int(np.searchsorted(hops_present, first)) - 1, 0)
+            b = int(np.searchsorted(hops_present, last)) + 3
+            hop_range = slice(a, min(b, a + MOTION_MAX_HOPS))
     chosen = hops_present[hop_range]
     if not len(chosen):
         ax.text(0.5, 0.5, f"no hops in range (run has {len(hops_present)})", transform=ax.transAxes,
@@ -761,8 +763,9 @@ def plot_main(argv=None):
     p.add_argument("--motion-hops", default="auto", metavar="A:B",
                    help="hops drawn in panel (a): a python slice over the logged hops, e.g. 0:4 or "
                         "-5: (the last five, which shows a fall if there was one); default 'auto' = "
-                        "from the hop before the first push to two hops after the last one, or the "
-                        "last five hops if the run has no push")
+                        "from the hop before the first push to two hops after the last one (at "
+                        f"most {MOTION_MAX_HOPS} hops), or the last five hops if the run has no "
+                        "push")
     p.add_argument("--motion-runs", type=int, default=4, metavar="K",
                    help="panel (a) shows the first K runs, one row each (default 4)")
     p.add_argument("--snap-every", type=int, default=0, metavar="N",
