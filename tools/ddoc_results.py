@@ -206,6 +206,15 @@ class Run:
         return self.events is not None and "fall" in self.events["type"]
 
     @property
+    def fall_hop(self):
+        """Hop index of the fall: from the fall event, else the first hop without a complete row."""
+        if self.events is not None:
+            for h, ty in zip(self.events["hop"], self.events["type"]):
+                if ty == "fall" and math.isfinite(h):
+                    return int(h)
+        return int(self.hops["hop"][-1]) + 1 if len(self.hops) else 0
+
+    @property
     def fall_reason(self):
         return str(self.summary.get("fall_reason") or "")
 
@@ -656,6 +665,7 @@ def result_row(run, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0):
     h = run.hops
     n = len(h)
     row = {"scenario": run.scenario, "method": run.method, "hops": n, "fell": run.fell,
+           "fall_hop": run.fall_hop if run.fell else None,
            "fall_reason": run.fall_reason, "exit_code": run.exit_code, "path": run.path}
     conv_src = "summary"
     conv = run.summary.get("converged_hop") if "converged_hop" in run.summary else None
@@ -687,7 +697,7 @@ def _status(row):
         return f"error (exit {ec})"
     if row["fell"]:
         why = f": {row['fall_reason']}" if row["fall_reason"] else ""
-        return f"fell in hop {row['hops']}{why}"
+        return f"fell in hop {row['fall_hop']}{why}"
     if ec == 3:
         return "fell (exit 3)"
     return "ok"
@@ -724,7 +734,8 @@ def results_markdown(runs, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0, fai
     over = f"the last {tail} hops" if tail > 0 else "all logged hops"
     legend = [
         "",
-        f"hops: complete rows of hops.csv (hops survived). final cost: cost (42) of the last logged "
+        f"status: 'fell in hop k' gives the 0-based hop of the fall (events.csv) and the reason "
+        f"(summary.json). hops: complete rows of hops.csv (hops survived). final cost: cost (42) of the last logged "
         f"hop. I4: penalty of the hop at convergence, or of the last hop if not converged. "
         f"Means over {over}. converged at hop: 0-based hop index at which the convergence test "
         f"held, from summary.json; * = computed from hops.csv as the hop where {delta_i} "

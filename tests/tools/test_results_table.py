@@ -33,7 +33,7 @@ class ResultsTableTest(TempDirTest):
         self.assertEqual(by[("inexact_m8", "ocfb")][3], "4")
         self.assertEqual(by[("push_m12", "alg1")][3], "15")
         self.assertEqual(by[("exact_m8", "alg1")][2], "ok")
-        self.assertIn("fell", by[("inexact_m8", "ocfb")][2])
+        self.assertTrue(by[("inexact_m8", "ocfb")][2].startswith("fell in hop 4"))  # fall event
         self.assertIn("body touched the ground", by[("inexact_m8", "ocfb")][2])
         # convergence: computed for exact_m8 (summary has null), taken from summary for push_m12
         self.assertEqual(by[("exact_m8", "alg1")][-1], "9*")
