@@ -627,9 +627,9 @@ def plot_fig2(runs, out_dir, hop_range=None, snap_every=0, motion_runs=4, dpi=12
 
     # combined: (a) on top, (b)-(e) in a 2x2 grid below
     from matplotlib.gridspec import GridSpec, GridSpecFromSubplotSpec
-    fig = plt.figure(figsize=(13, 2.2 * len(motion) + 8))
-    gs = GridSpec(3, 2, figure=fig, height_ratios=[1.1 * len(motion), 4, 4])
-    top = GridSpecFromSubplotSpec(len(motion), 1, subplot_spec=gs[0, :])
+    fig = plt.figure(figsize=(13, 2.6 * len(motion) + 8.5))
+    gs = GridSpec(3, 2, figure=fig, height_ratios=[2.6 * len(motion), 4, 4])
+    top = GridSpecFromSubplotSpec(len(motion), 1, subplot_spec=gs[0, :], hspace=0.6)
     for k, (run, color) in enumerate(motion):
         draw_motion(fig.add_subplot(top[k]), run, color, hop_range, snap_every)
     ax = fig.add_subplot(gs[1, 0])
