@@ -1,0 +1,155 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The backward pass (30): P(tau), p(tau) of the co-state approximation (29) on the sample grid
+// of a nominal (measured or predicted) trajectory, with the jump conditions at tau = k.
+#ifndef DDOC_BACKWARD_PASS_H_
+#define DDOC_BACKWARD_PASS_H_
+
+#include <memory>
+#include <vector>
+
+#include "ddoc/problem.h"
+#include "ddoc/time_normalization.h"
+#include "ddoc/trajectory.h"
+
+namespace ddoc {
+
+/// Integration scheme between two samples (coefficients interpolated linearly in tau).
+enum class BackwardIntegrator {
+  kRk4,      ///< classical RK4, 4 products P*F_z per interval, local error O(h^5)
+  kMidpoint  ///< explicit midpoint (RK2), 2 products per interval, local error O(h^3)
+};
+
+/// Settings of BackwardPass.
+struct BackwardPassSettings {
+  /// Include the paper's driving term (P F_u + L_zu) du^{i-1} in the p-equation of (30).
+  /// false (default): p is the exact adjoint of the linearized cost, so L_u + F_u^T p is the
+  /// gradient of the cost w.r.t. u(tau) and p_2(0) the gradient w.r.t. T.
+  bool use_previous_du = false;
+  /// Integration scheme (default RK4).
+  BackwardIntegrator integrator = BackwardIntegrator::kRk4;
+};
+
+/// The backward pass (30), derived from (26)-(29) with delta-lambda = P delta-z + p:
+///
+///   dP/dtau = -(P F_z + F_z^T P + L_zz),                                P(K) = Phi_{K,zz}
+///   dp/dtau = -(F_z^T p + L_z + (P F_u + L_zu) du_prev),                 p(K) = Phi_{K,z}
+///   P^-(k)  = Phi_{k,zz} + G_{k,z}^T P^+(k) G_{k,z},   p^-(k) = Phi_{k,z} + G_{k,z}^T p^+(k)
+///
+/// ERRATUM: the printed p-equation of (30) omits L_z; it is included here (without it p is not
+/// the co-state of (21) and the gradient test fails). G_{k,z} is (n_{k+1}+K) x (n_k+K), so P
+/// and p change size across a jump.
+///
+/// Zero-based modes: mode k lives on tau in [k, k+1] and its last sample (the pre-switch state
+/// x^-(T_k)) carries the jump from mode k+1. Coefficients are evaluated at the samples of the
+/// nominal trajectory and interpolated linearly in tau inside each interval.
+///
+/// Outputs per sample (mode k, sample j): P (n_k+K)^2, p (n_k+K), the gain
+/// L_uz + F_u^T P (m x (n_k+K)) and feed-forward L_u + F_u^T p (m) of (34), and L_uu (m x m).
+///
+/// Lifecycle: Allocate once for the largest horizon; Run allocates nothing.
+class BackwardPass {
+ public:
+  BackwardPass() = default;
+  BackwardPass(const BackwardPass&) = delete;
+  BackwardPass& operator=(const BackwardPass&) = delete;
+
+  /// Sizes all buffers for up to max_samples samples in total (allocates). Validates the
+  /// problem; the problem must outlive this object.
+  void Allocate(const Problem& problem, int max_samples, const BackwardPassSettings& settings = {});
+  /// Invalidates the results (keeps the buffers).
+  void Reset() { valid_ = false; }
+  /// Runs (30) on the grid of `nominal` (must match the problem's dimensions, at most
+  /// max_samples samples). `du_prev` (m x total samples, mode-major) is the previous control
+  /// variation at the samples; used only with settings.use_previous_du (nullptr = 0).
+  /// Does not allocate. Throws InvalidArgument on size mismatches.
+  void Run(const Trajectory& nominal, const Matrix* du_prev = nullptr);
+
+  bool valid() const { return valid_; }
+  const BackwardPassSettings& settings() const { return settings_; }
+  BackwardPassSettings& mutable_settings() { return settings_; }
+  int num_modes() const { return K_; }
+  int input_dim() const { return m_; }
+  int max_samples() const { return max_samples_; }
+  /// Number of samples of mode k in the last Run.
+  int num_samples(int k) const { return counts_[k]; }
+  /// Global (mode-major) index of sample (k, j).
+  int index(int k, int j) const { return offsets_[k] + j; }
+  /// n_k + K.
+  int augmented_dim(int k) const { return dims_[k] + K_; }
+
+  double tau(int k, int j) const { return tau_(index(k, j)); }
+  Eigen::Map<const Matrix> P(int k, int j) const;
+  Eigen::Map<const Vector> p(int k, int j) const;
+  /// L_uz + F_u^T P, m x (n_k+K): the state/time feedback part of b in (34).
+  Eigen::Map<const Matrix> Gain(int k, int j) const;
+  /// L_u + F_u^T p, m: the constant part of b in (34); with use_previous_du = false the
+  /// gradient density of the cost w.r.t. u(tau).
+  Eigen::Map<const Vector> Feedforward(int k, int j) const;
+  /// L_uu, m x m.
+  Eigen::Map<const Matrix> Luu(int k, int j) const;
+  /// p_2(0) (K): with use_previous_du = false, the gradient of the cost w.r.t. T.
+  Eigen::Map<const Vector> p2_initial() const;
+  /// P_22(0) (K x K) of (31).
+  Matrix P22_initial() const;
+
+ private:
+  // Coefficients of (30) at one point of the grid (sized for n_max; top blocks used).
+  struct Coefficients {
+    Matrix A;    // n_max x nz_max: top n rows of F_z (the bottom K rows are zero)
+    Matrix Q;    // nz_max x nz_max: L_zz
+    Vector Lz;   // nz_max
+    Matrix B;    // n_max x m: top n rows of F_u
+    Matrix Lzu;  // nz_max x m
+    Matrix Luz;  // m x nz_max
+    Vector Lu;   // m
+    Matrix Luu;  // m x m
+    Vector du;   // m: previous control variation (0 unless use_previous_du)
+    void Allocate(int n_max, int nz_max, int m);
+  };
+  void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev, Coefficients* c);
+  void Interpolate(int n, int nz, const Coefficients& a, const Coefficients& b, Coefficients* c);
+  // dP/ds = P A + A^T P + Q, dp/ds = A^T p + Lz + (P B + Lzu) du in backward time s.
+  void Derivative(int n, int nz, const Coefficients& c, const ConstMatrixRef& P,
+                  const ConstVectorRef& p, MatrixRef dP, VectorRef dp);
+  void Step(int n, int nz, double h, const Coefficients& hi, const Coefficients& lo,
+            MatrixRef P, VectorRef p);
+  void StoreOutputs(int k, int j, const Coefficients& c);
+
+  const Problem* problem_ = nullptr;
+  BackwardPassSettings settings_;
+  std::unique_ptr<TimeNormalization> normalization_;
+  int K_ = 0, m_ = 0, n_max_ = 0, nz_max_ = 0, max_samples_ = 0;
+  bool valid_ = false;
+  std::vector<int> dims_;     // n_k
+  std::vector<int> counts_;   // N_k of the last run
+  std::vector<int> offsets_;  // first global index of mode k
+  // Per-sample storage, one column per global sample (only the leading entries are used).
+  Vector tau_;         // S
+  Matrix P_store_;     // nz_max^2 x S
+  Matrix p_store_;     // nz_max x S
+  Matrix gain_store_;  // m * nz_max x S
+  Matrix ff_store_;    // m x S
+  Matrix luu_store_;   // m^2 x S
+  // Workspace.
+  Coefficients coef_[3];  // hi (tau_{j+1}), lo (tau_j), mid
+  Vector z_;              // nz_max
+  Vector phiz_;           // nz_max
+  Matrix phizz_;          // nz_max x nz_max
+  Matrix Gz_;             // nz_max x nz_max (rectangular top-left block used)
+  Matrix tmp_;            // nz_max x nz_max
+  Matrix Fz_;             // nz_max x nz_max
+  Matrix Fu_;             // nz_max x m
+  Matrix P_;              // nz_max x nz_max: current P
+  Vector p_;              // nz_max: current p
+  Matrix Ps_;             // stage P
+  Vector ps_;             // stage p
+  Matrix kP_[4];          // stage derivatives of P
+  Vector kp_[4];          // stage derivatives of p
+  Matrix PA_;             // nz_max x nz_max
+  Vector Bdu_;            // n_max
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_BACKWARD_PASS_H_

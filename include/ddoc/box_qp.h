@@ -1,0 +1,69 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// A dense box-constrained QP solver (projected Newton), used for (31) and (33).
+#ifndef DDOC_BOX_QP_H_
+#define DDOC_BOX_QP_H_
+
+#include <vector>
+
+#include "ddoc/switched_system.h"
+
+namespace ddoc {
+
+/// Settings of BoxQP.
+struct BoxQPSettings {
+  int max_iterations = 50;         ///< Newton iterations (each: one Cholesky of the free block)
+  double tolerance = 1e-12;        ///< stop when ||x - clamp(x - grad)||_inf <= tolerance * (1 + ||g||_inf)
+  double armijo = 1e-4;            ///< sufficient decrease factor of the projected line search
+  double backtrack = 0.5;          ///< step shrink factor of the projected line search
+  int max_line_search_steps = 40;  ///< line search steps before giving up
+};
+
+enum class BoxQPStatus {
+  kConverged = 0,          ///< projected-gradient test met: x satisfies the KKT conditions
+  kMaxIterations,          ///< iteration limit; x is feasible and decreased the objective
+  kNoProgress,             ///< line search failed; x is feasible (typically at the solution)
+  kNotPositiveDefinite,    ///< the free block of H was not positive definite; x is feasible
+};
+
+/// min_x 1/2 x^T H x + g^T x  subject to  lo <= x <= hi, H symmetric positive definite.
+///
+/// Projected Newton (Bertsekas 1982): at each iterate, the variables at a bound whose
+/// gradient pushes outward are held; a Newton step on the free variables
+/// (H_FF d_F = -grad_F) is searched along the projection onto the box with an Armijo test.
+/// It terminates in finitely many steps on strictly convex QPs once the active set settles.
+///
+/// Allocation-free after construction/Allocate with the largest size (an own in-place
+/// Cholesky on a preallocated buffer is used for the varying free block).
+class BoxQP {
+ public:
+  explicit BoxQP(int max_size = 0, const BoxQPSettings& settings = {});
+  /// Sizes the workspace for problems up to max_size variables (allocates).
+  void Allocate(int max_size);
+  int max_size() const { return max_size_; }
+  BoxQPSettings& settings() { return settings_; }
+
+  /// Solves the QP. `x` holds the warm start on entry (clamped into the box) and the solution
+  /// on return. Sizes must agree and not exceed max_size; lo <= hi (InvalidArgument otherwise).
+  BoxQPStatus Solve(const ConstMatrixRef& H, const ConstVectorRef& g, const ConstVectorRef& lo,
+                    const ConstVectorRef& hi, VectorRef x);
+  /// Newton iterations used by the last Solve.
+  int iterations() const { return iterations_; }
+
+ private:
+  double Objective(const ConstMatrixRef& H, const ConstVectorRef& g, const double* x, int n) const;
+
+  BoxQPSettings settings_;
+  int max_size_ = 0;
+  int iterations_ = 0;
+  Vector grad_;            // n: H x + g
+  Vector direction_;       // n: Newton direction (0 on held variables)
+  Vector trial_;           // n: projected trial point
+  Vector rhs_;             // n_free
+  Matrix chol_;            // max x max: Cholesky factor of H_FF (lower, top-left n_free block)
+  std::vector<int> free_;  // n_free indices of the free variables
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_BOX_QP_H_

@@ -1,0 +1,47 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// A finite-difference checker for user models.
+#ifndef DDOC_CHECK_DERIVATIVES_H_
+#define DDOC_CHECK_DERIVATIVES_H_
+
+#include <string>
+#include <vector>
+
+#include "ddoc/switched_system.h"
+
+namespace ddoc {
+
+/// One checked derivative.
+struct DerivativeError {
+  std::string name;          ///< "fx", "fu", "gx", "hx", "lx", "lu", "lxx", "luu", "lux", "phix", "phixx"
+  double max_abs_error = 0;  ///< max_ij |analytic - central difference|
+  double max_rel_error = 0;  ///< max_abs_error / max(1, max_ij |central difference|)
+};
+
+/// All checked derivatives of one mode at one point.
+struct DerivativeCheckReport {
+  std::vector<DerivativeError> entries;
+  /// The entry called `name`, or nullptr.
+  const DerivativeError* Find(const std::string& name) const;
+  /// Largest max_rel_error over all entries.
+  double max_rel_error() const;
+  /// True when every entry has max_rel_error <= tolerance.
+  bool Passed(double tolerance) const { return max_rel_error() <= tolerance; }
+};
+
+/// Settings of CheckDerivatives.
+struct DerivativeCheckSettings {
+  double step = 1e-6;  ///< central difference step, scaled by max(1, |x_i|)
+};
+
+/// Compares the analytic derivatives of `system` (f_x, f_u; g_x when mode k has a reset;
+/// h_x when s_k > 0) and, if `cost` is non-null, of the costs (l_x, l_u, l_xx, l_uu, l_ux,
+/// phi_x, phi_xx) with central differences at (x, u) in mode k. First derivatives are
+/// differenced from values, second derivatives from the analytic first derivatives.
+DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const SwitchedCost* cost,
+                                       int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                                       const DerivativeCheckSettings& settings = {});
+
+}  // namespace ddoc
+
+#endif  // DDOC_CHECK_DERIVATIVES_H_

@@ -1,0 +1,22 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Umbrella header of the ddoc engine.
+#ifndef DDOC_DDOC_H_
+#define DDOC_DDOC_H_
+
+#include "ddoc/autodiff.h"
+#include "ddoc/backward_pass.h"
+#include "ddoc/box_qp.h"
+#include "ddoc/check_derivatives.h"
+#include "ddoc/cost.h"
+#include "ddoc/learner.h"
+#include "ddoc/online_controller.h"
+#include "ddoc/plant.h"
+#include "ddoc/policy.h"
+#include "ddoc/problem.h"
+#include "ddoc/switched_system.h"
+#include "ddoc/switching_time_update.h"
+#include "ddoc/time_normalization.h"
+#include "ddoc/trajectory.h"
+
+#endif  // DDOC_DDOC_H_

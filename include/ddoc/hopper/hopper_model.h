@@ -1,0 +1,147 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The analytic planar one-legged VSA hopper of paper Section V-A on the engine's
+// SwitchedSystem API. Two modes per hop, starting at takeoff:
+//
+//   mode 0 = flight (n = 14), eq. (38) + VSA;  touchdown reset g_0 = (40): 14 -> 10
+//   mode 1 = stance (n = 10), eq. (39) + VSA;  takeoff map g_1 (cycle reset): 10 -> 14
+//
+// Conventions (DESIGN.md, checked numerically against the MJCF robot): x right, y up; theta is the
+// leg angle from the downward vertical, counter-clockwise positive; the foot is at
+// (x, y) + r (sin theta, -cos theta); the hip torque acts +tau on the body and -tau on the leg.
+#ifndef DDOC_HOPPER_HOPPER_MODEL_H_
+#define DDOC_HOPPER_HOPPER_MODEL_H_
+
+#include <Eigen/Dense>
+
+#include "ddoc/hopper/vsa.h"
+#include "ddoc/switched_system.h"
+
+namespace ddoc {
+
+namespace hopper {
+
+constexpr int kFlight = 0;       ///< mode index of the flight phase
+constexpr int kStance = 1;       ///< mode index of the stance phase
+constexpr int kFlightDim = 14;   ///< n_0
+constexpr int kStanceDim = 10;   ///< n_1
+constexpr int kInputDim = 4;     ///< m
+
+/// Flight state x in R^14 = [x, y, theta, phi, r, k_hip, k_leg, and their rates].
+enum FlightIndex : int {
+  kX = 0, kY, kTheta, kPhi, kR, kKhip, kKleg,
+  kXd, kYd, kThetad, kPhid, kRd, kKhipd, kKlegd
+};
+/// Stance state x in R^10 = [theta, phi, r, k_hip, k_leg, and their rates]; the foot is fixed.
+enum StanceIndex : int {
+  kSTheta = 0, kSPhi, kSR, kSKhip, kSKleg,
+  kSThetad, kSPhid, kSRd, kSKhipd, kSKlegd
+};
+/// Input u in R^4 = [tau0 (N m), F0 (N), k0_hip (N m/rad), k0_leg (N/m)].
+enum InputIndex : int { kTau0 = 0, kF0, kK0hip, kK0leg };
+
+/// Table I / Fig. 2 input bounds: u_min = [-4, -4, 10, 1780], u_max = [4, 4, 150, 2350].
+Eigen::Vector4d InputLowerBound();
+Eigen::Vector4d InputUpperBound();
+
+}  // namespace hopper
+
+/// Which velocity jump the touchdown reset (40)-(41) uses.
+enum class ImpactModel {
+  /// Physics of a massless leg with inertia J_leg pinned at the foot (default; matches the MJCF
+  /// robot, see README): ratio J_leg / (J_leg + M r^2) with the actual leg length r at touchdown.
+  kMasslessLeg,
+  /// The paper as printed: ratio J_body / (J_body + M r0^2), theta-row M r0 / J_body.
+  kPaperLiteral,
+};
+
+/// Parameters of the analytic hopper (Table I). Defaults: the 10 kg robot without drag.
+struct HopperParams {
+  double M = 10.0;       ///< body mass, kg (> 0)
+  double J_body = 2.5;   ///< body pitch inertia, kg m^2 (> 0)
+  double J_leg = 0.25;   ///< leg inertia about the hip, kg m^2 (> 0)
+  double r0 = 0.7;       ///< natural leg length, m (> 0)
+  double c_d = 0.0;      ///< air drag, kg/m (>= 0); force -c_d v|v| per component, eq. (38)
+  double beta = kDefaultVsaBeta;  ///< VSA stiffness bandwidth, rad/s (> 0)
+  double g = 9.81;       ///< gravity, m/s^2 (> 0)
+  ImpactModel impact = ImpactModel::kMasslessLeg;  ///< touchdown reset variant
+
+  /// Throws ddoc::InvalidArgument naming the first bad field (expected vs actual).
+  void Validate() const;
+};
+
+/// The analytic hopper as a K = 2 switched system (flight, stance), m = 4.
+///
+/// Flight (38):  xdd = -c_d/M xd|xd|,  ydd = -g - c_d/M yd|yd|,  thetadd = -tau/J_leg,
+///               phidd = tau/J_body,  rdd = 0.
+/// Stance (39):  thetadd = [M (r g sin theta - 2 r rd thetad) - tau] / (J_leg + M r^2),
+///               phidd = tau/J_body,  rdd = r thetad^2 - g cos theta + F/M.
+/// VSA (both):   tau = tau0 - k_hip (phi - theta),  F = F0 - k_leg (r - r0),
+///               kdd_i = beta^2 (k0_i - k_i) - 2 beta kd_i.
+/// Touchdown g_0 (40): v = xd cos th + yd sin th + r thd (foot velocity normal to the leg),
+///               eps = J / (J + M r^2), J = J_leg (kMasslessLeg) or J_body and r -> r0 (literal):
+///               thd+ = thd - eps (M r / J) v,  rd+ = -xd sin th + yd cos th (foot stops),
+///               all positions, phid and the stiffness states are continuous.
+/// Takeoff g_1 (cycle reset, stance -> flight), foot at x_f = 0 (x is relative to the last foothold;
+///               add the absolute foot x yourself, see TakeoffMap):
+///               x = x_f - r sin th, y = r cos th, xd = -rd sin th - r thd cos th,
+///               yd = rd cos th - r thd sin th, rd+ = 0 (the massless leg stops extending at
+///               F_leg = 0 and stays at its length during flight, consistent with rdd = 0).
+/// Switching surface h_0 (s_0 = 1): foot height y_f = y - r cos theta (the I4 penalty of (42)).
+/// Derivatives: Eigen AutoDiff with fixed sizes (allocation-free).
+class HopperModel : public SwitchedSystem {
+ public:
+  explicit HopperModel(const HopperParams& params);
+
+  const HopperParams& params() const { return params_; }
+
+  /// Guard of the model plant (events are sign changes from > 0 to <= 0):
+  ///   k = 0 (flight): foot height y_f = y - r cos theta; touchdown when it reaches 0 descending.
+  ///   k = 1 (stance): leg force F_leg = F0 - k_leg (r - r0); takeoff when it reaches 0.
+  double Guard(int k, const ConstVectorRef& x, const ConstVectorRef& u) const;
+
+  /// Energy loss (41) at touchdown for the pre-impact flight state x^-:
+  /// Delta E = 1/2 M eps v^2 (with the same eps, v as the reset).
+  double ImpactEnergyLoss(const ConstVectorRef& x_flight) const;
+  /// eps of the reset for leg length r (r0 in the literal variant).
+  double ImpactRatio(double r) const;
+
+  /// Takeoff map with an explicit absolute foot position foot_x (10 -> 14).
+  void TakeoffMap(const ConstVectorRef& x_stance, double foot_x, VectorRef x_flight) const;
+  /// Foot x at touchdown (flight state): x + r sin theta.
+  static double FootX(const ConstVectorRef& x_flight);
+  /// Foot height y - r cos theta (flight state).
+  static double FootHeight(const ConstVectorRef& x_flight);
+
+  /// Templated right-hand sides shared by the double and AutoDiff paths. Sizes: x 14 / 10, u 4.
+  template <typename T>
+  void FlightRhs(const Eigen::Matrix<T, 14, 1>& x, const Eigen::Matrix<T, 4, 1>& u,
+                 Eigen::Matrix<T, 14, 1>* xdot) const;
+  template <typename T>
+  void StanceRhs(const Eigen::Matrix<T, 10, 1>& x, const Eigen::Matrix<T, 4, 1>& u,
+                 Eigen::Matrix<T, 10, 1>* xdot) const;
+  template <typename T>
+  void TouchdownReset(const Eigen::Matrix<T, 14, 1>& x, Eigen::Matrix<T, 10, 1>* xs) const;
+  template <typename T>
+  void TakeoffReset(const Eigen::Matrix<T, 10, 1>& xs, const T& foot_x,
+                    Eigen::Matrix<T, 14, 1>* x) const;
+  template <typename T>
+  T EnergyLoss(const Eigen::Matrix<T, 14, 1>& x) const;
+
+ protected:
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+              VectorRef xdot) const override;
+  void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, MatrixRef fx,
+                         MatrixRef fu) const override;
+  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override;
+  void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const override;
+  void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override;
+  void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const override;
+
+ private:
+  HopperParams params_;
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_HOPPER_HOPPER_MODEL_H_

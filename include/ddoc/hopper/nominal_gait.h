@@ -1,0 +1,53 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// A nominal hopping gait of the analytic model under a CONSTANT input: the starting point
+// (x0, u0, T0) for the optimizer (Algorithm 1 needs an initial control that hops).
+#ifndef DDOC_HOPPER_NOMINAL_GAIT_H_
+#define DDOC_HOPPER_NOMINAL_GAIT_H_
+
+#include <Eigen/Dense>
+
+#include "ddoc/hopper/hop_simulator.h"
+#include "ddoc/hopper/hopper_model.h"
+
+namespace ddoc {
+
+/// Settings of FindNominalGait.
+struct NominalGaitSettings {
+  double forward_speed = 0.5;  ///< takeoff xd of the gait, m/s (held fixed by the search)
+  double apex_height = 0.8;    ///< initial guess of the apex COM height, m
+  double k0_hip = 50.0;        ///< constant hip stiffness command, N m/rad (u0[2])
+  double k0_leg = 2000.0;      ///< constant leg stiffness command, N/m (u0[3])
+  int max_iterations = 60;     ///< Levenberg-Marquardt iterations per continuation stage
+  int continuation_stages = 4; ///< forward speed is ramped 0 -> forward_speed in this many stages
+  double dt = 1e-3;            ///< RK4 step of the hop simulation, s
+};
+
+/// A near-periodic hop of the analytic model under constant u0.
+struct NominalGait {
+  Eigen::Matrix<double, 14, 1> x0;  ///< flight state at takeoff (foot at x = 0, on the ground)
+  Eigen::Vector4d u0;               ///< constant input [tau0, F0, k0_hip, k0_leg]
+  Eigen::Vector2d T0;               ///< (T1, T2): touchdown and takeoff times of the hop, s
+  HopResult hop;                    ///< the simulated hop from x0 under u0
+  double periodicity = 0.0;  ///< I1 = (x(T2) - x0)' Q (x(T2) - x0) with Fig. 2's Q (0 = periodic)
+  double max_abs_residual = 0.0;  ///< max |x_i(T2) - x0_i| over the Q-weighted entries
+  double apex = 0.0;          ///< apex COM height, m
+  double stance_time = 0.0;   ///< T2 - T1, s
+  double period = 0.0;        ///< T2, s
+  double forward_speed = 0.0; ///< xd at takeoff, m/s
+  double step_length = 0.0;   ///< horizontal COM travel over the hop, m
+  double energy_loss = 0.0;   ///< Delta E at touchdown (41), J
+};
+
+/// Shooting search (Levenberg-Marquardt, finite-difference Jacobian) over
+/// p = [theta0, phi0, yd0, thetad0, phid0, tau0] with xd0 = forward_speed, r = r0, F0 = 0,
+/// k = k0 (at rest), minimizing the Q-weighted takeoff-to-takeoff residual of I1.
+/// A constant-input hop is conservative except for the touchdown loss (41), so exact periodicity
+/// needs v_f_theta = 0 at touchdown; the residual left is reported in the result.
+/// Throws ddoc::InvalidArgument for invalid params/settings.
+NominalGait FindNominalGait(const HopperParams& params,
+                            const NominalGaitSettings& settings = NominalGaitSettings());
+
+}  // namespace ddoc
+
+#endif  // DDOC_HOPPER_NOMINAL_GAIT_H_

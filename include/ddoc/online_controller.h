@@ -1,0 +1,124 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The online control update (33)-(34), one time step at a time.
+#ifndef DDOC_ONLINE_CONTROLLER_H_
+#define DDOC_ONLINE_CONTROLLER_H_
+
+#include <vector>
+
+#include "ddoc/backward_pass.h"
+#include "ddoc/box_qp.h"
+#include "ddoc/policy.h"
+#include "ddoc/problem.h"
+#include "ddoc/trajectory.h"
+
+namespace ddoc {
+
+/// Settings of OnlineController.
+struct OnlineControllerSettings {
+  /// mu added to the diagonal of L_uu in (33), relative: mu = regularization * (1 + max|diag L_uu|).
+  /// Keeps the QP strictly convex when l_uu is singular.
+  double regularization = 1e-9;
+  /// Interpolate nominal and gains linearly in tau between samples (true) or hold the sample
+  /// at or before tau (false).
+  bool interpolate = true;
+  /// Warm-start the box QP with the previous step's du.
+  bool warm_start = true;
+  BoxQPSettings qp;  ///< settings of the m-dimensional box QP
+};
+
+/// The control law of trial i+1, built from nominal trial i (Algorithm 1, online part):
+///
+///   du = argmin_{du in U - u^i(tau)} 1/2 du^T L_uu du + alpha du^T b                 (33)
+///   b  = (L_uz + F_u^T P) [dx; dT_alpha] + L_u + F_u^T p                              (34)
+///   u  = clamp(u^i(tau) + du, u_min, u_max)                                           (35)
+///
+/// with dx = x_measured - x^i(tau) the measured deviation from the nominal state at the same
+/// normalized time. The gains (L_uz + F_u^T P) and (L_u + F_u^T p) come from the BackwardPass;
+/// the dT part is folded into the constant at Load, so a Step costs O(n m + m^3).
+///
+/// Time mapping (see Policy): tau = k + clamp(t_since_mode_start / D_k^{i+1}, 0, 1) with the
+/// planned durations of T^{i+1} = T^i + dT_alpha. A mode lasting longer than planned keeps the
+/// gains and nominal of its last sample (tau = k+1); the next mode starts when the plant reports
+/// the (measured) switch.
+///
+/// Robustness: a non-finite x or t gives u = clamp(u^i(tau)) (du = 0) and increments
+/// nonfinite_count(); the output is never NaN. Wrong sizes or k throw InvalidArgument.
+///
+/// Lifecycle: Allocate (sizes), Load (between trials, no allocation), BeginTrial, Step (no
+/// allocation).
+class OnlineController : public Policy {
+ public:
+  OnlineController() = default;
+
+  /// Sizes every buffer for up to max_samples nominal samples (allocates). The problem must
+  /// outlive this object.
+  void Allocate(const Problem& problem, int max_samples,
+                const OnlineControllerSettings& settings = {});
+  /// Loads the control law: nominal trajectory i, its backward pass, alpha and dT_alpha
+  /// (T^{i+1} = nominal.T + dT). Does not allocate.
+  void Load(const Trajectory& nominal, const BackwardPass& pass, double alpha,
+            const ConstVectorRef& dT);
+  bool loaded() const { return loaded_; }
+
+  void BeginTrial() override;
+  double PlannedDuration(int k) const override { return planned_durations_(k); }
+  /// One control step (33)-(35). Allocation-free.
+  void Step(int k, double t_since_mode_start, const ConstVectorRef& x_measured,
+            VectorRef u_out) override;
+
+  double alpha() const { return alpha_; }
+  const Vector& dT() const { return dT_; }                    ///< K
+  const Vector& planned_T() const { return planned_T_; }      ///< K: T^{i+1}
+  const Vector& nominal_T() const { return nominal_T_; }      ///< K: T^i
+  /// int |du|^2 dtau accumulated over this trial's Step calls (left Riemann sum in tau).
+  double du_squared_integral() const { return du_integral_; }
+  /// Steps with a non-finite state or time since BeginTrial.
+  int nonfinite_count() const { return nonfinite_count_; }
+  /// Box QPs that did not report kConverged since BeginTrial.
+  int qp_failures() const { return qp_failures_; }
+  /// The last du (m) and tau.
+  const Vector& last_du() const { return du_; }
+  double last_tau() const { return last_tau_; }
+  OnlineControllerSettings& settings() { return settings_; }
+
+ private:
+  // Finds j with tau_j <= tau <= tau_{j+1} in mode k; returns the interpolation weight.
+  double Locate(int k, double tau, int* j);
+  void Accumulate(int k, double tau);
+
+  const Problem* problem_ = nullptr;
+  OnlineControllerSettings settings_;
+  int K_ = 0, m_ = 0, n_max_ = 0, max_samples_ = 0;
+  bool loaded_ = false;
+  std::vector<int> dims_, counts_, offsets_, cursor_;
+  double alpha_ = 0;
+  Vector dT_, planned_T_, nominal_T_, planned_durations_;  // K
+  // Per sample (global index, mode-major).
+  Vector tau_;  // S
+  Matrix x_;    // n_max x S: nominal states
+  Matrix u_;    // m x S: nominal inputs
+  Matrix Kx_;   // m * n_max x S: state gain (L_uz + F_u^T P)(:, 0:n_k), column-major m x n_k
+  Matrix c_;    // m x S: (L_uz + F_u^T P)(:, n_k:) dT + L_u + F_u^T p
+  Matrix luu_;  // m^2 x S
+  // Step workspace.
+  BoxQP qp_;
+  Vector dx_;      // n_max
+  Vector xnom_;    // n_max
+  Vector unom_;    // m
+  Vector b_;       // m
+  Matrix H_;       // m x m
+  Vector lo_, hi_; // m
+  Vector du_;      // m
+  // Per-trial bookkeeping.
+  double du_integral_ = 0;
+  double last_tau_ = 0;
+  double last_du_sq_ = 0;
+  int last_mode_ = -1;
+  int nonfinite_count_ = 0;
+  int qp_failures_ = 0;
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_ONLINE_CONTROLLER_H_

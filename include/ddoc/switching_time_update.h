@@ -1,0 +1,51 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The switching-time update (31).
+#ifndef DDOC_SWITCHING_TIME_UPDATE_H_
+#define DDOC_SWITCHING_TIME_UPDATE_H_
+
+#include <limits>
+
+#include "ddoc/box_qp.h"
+#include "ddoc/problem.h"
+
+namespace ddoc {
+
+/// Settings of the switching-time update.
+struct SwitchingTimeSettings {
+  /// Levenberg-Marquardt floor: the reduced Hessian H = S^T P22 S gets mu I added so that its
+  /// smallest eigenvalue is at least relative_regularization * max(1, lambda_max(H)).
+  double relative_regularization = 1e-6;
+  /// Additional cap |dD_k| <= max_duration_step on each duration change (s); default none.
+  double max_duration_step = std::numeric_limits<double>::infinity();
+};
+
+/// Result of (31).
+struct SwitchingTimeStep {
+  Vector dT;                  ///< K: delta T_alpha
+  Vector T_planned;           ///< K: T^{i+1} = T^i + dT
+  double regularization = 0;  ///< the mu that was added (0 when H was positive definite enough)
+  BoxQPStatus status = BoxQPStatus::kConverged;
+};
+
+/// Solves (31):  min_dT 1/2 dT^T P22(0) dT + alpha p2(0)^T dT  subject to (7) at T^i + dT.
+///
+/// The bounds (7) are on durations D_k = T_k - T_{k-1}, not on T, so the QP is solved in the
+/// duration change dD (dT = S dD, S lower triangular ones): H = S^T P22 S, g = alpha S^T p2,
+/// box duration_min - D^i <= dD <= duration_max - D^i (the paper's (25) writes the box on T
+/// directly, which only holds for K = 1).
+///
+/// P22 comes from the Lyapunov-type (30) and need not be positive definite. Levenberg-Marquardt:
+/// with lambda_min, lambda_max the extreme eigenvalues of H, mu = max(0, floor - lambda_min),
+/// floor = relative_regularization * max(1, |lambda_max|), and H + mu I is used. For an
+/// indefinite H this turns the step into a damped gradient step; with H = 0 (e.g. all durations
+/// fixed) the bounds decide.
+///
+/// Not allocation-free (runs between trials).
+SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVectorRef& T_nominal,
+                                           const ConstMatrixRef& P22, const ConstVectorRef& p2,
+                                           double alpha, const SwitchingTimeSettings& settings = {});
+
+}  // namespace ddoc
+
+#endif  // DDOC_SWITCHING_TIME_UPDATE_H_

@@ -1,0 +1,162 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/check_derivatives.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+namespace ddoc {
+namespace {
+
+DerivativeError Compare(const std::string& name, const Matrix& analytic, const Matrix& fd) {
+  DerivativeError e;
+  e.name = name;
+  e.max_abs_error = analytic.size() ? (analytic - fd).cwiseAbs().maxCoeff() : 0.0;
+  const double scale = std::max(1.0, fd.size() ? fd.cwiseAbs().maxCoeff() : 0.0);
+  e.max_rel_error = e.max_abs_error / scale;
+  return e;
+}
+
+// Central-difference Jacobian of fn: R^n -> R^r at v.
+Matrix Jacobian(const std::function<Vector(const Vector&)>& fn, const Vector& v, double step) {
+  const Vector f0 = fn(v);
+  Matrix J(f0.size(), v.size());
+  for (int i = 0; i < v.size(); ++i) {
+    const double h = step * std::max(1.0, std::abs(v(i)));
+    Vector vp = v, vm = v;
+    vp(i) += h;
+    vm(i) -= h;
+    J.col(i) = (fn(vp) - fn(vm)) / (2 * h);
+  }
+  return J;
+}
+
+}  // namespace
+
+const DerivativeError* DerivativeCheckReport::Find(const std::string& name) const {
+  for (const auto& e : entries) {
+    if (e.name == name) return &e;
+  }
+  return nullptr;
+}
+
+double DerivativeCheckReport::max_rel_error() const {
+  double worst = 0;
+  for (const auto& e : entries) worst = std::max(worst, e.max_rel_error);
+  return worst;
+}
+
+DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const SwitchedCost* cost,
+                                       int k, const ConstVectorRef& x_in,
+                                       const ConstVectorRef& u_in,
+                                       const DerivativeCheckSettings& settings) {
+  const int n = system.state_dim(k);
+  const int m = system.input_dim();
+  const int K = system.num_modes();
+  if (x_in.size() != n || u_in.size() != m) {
+    throw InvalidArgument("CheckDerivatives(k=" + std::to_string(k) + "): x has size " +
+                          std::to_string(x_in.size()) + " (expected " + std::to_string(n) +
+                          "), u has size " + std::to_string(u_in.size()) + " (expected " +
+                          std::to_string(m) + ")");
+  }
+  const Vector x = x_in, u = u_in;
+  const double step = settings.step;
+  DerivativeCheckReport report;
+
+  Matrix fx(n, n), fu(n, m);
+  system.FlowDerivatives(k, x, u, fx, fu);
+  auto flow_x = [&](const Vector& xv) {
+    Vector f(n);
+    system.Flow(k, xv, u, f);
+    return f;
+  };
+  auto flow_u = [&](const Vector& uv) {
+    Vector f(n);
+    system.Flow(k, x, uv, f);
+    return f;
+  };
+  report.entries.push_back(Compare("fx", fx, Jacobian(flow_x, x, step)));
+  report.entries.push_back(Compare("fu", fu, Jacobian(flow_u, u, step)));
+
+  if (k < K - 1 || system.has_cycle_reset()) {
+    const int nn = system.state_dim((k + 1) % K);
+    Matrix gx(nn, n);
+    system.ResetDerivative(k, x, gx);
+    auto reset = [&](const Vector& xv) {
+      Vector g(nn);
+      system.Reset(k, xv, g);
+      return g;
+    };
+    report.entries.push_back(Compare("gx", gx, Jacobian(reset, x, step)));
+  }
+  const int s = system.surface_dim(k);
+  if (s > 0) {
+    Matrix hx(s, n);
+    system.SurfaceDerivative(k, x, hx);
+    auto surface = [&](const Vector& xv) {
+      Vector h(s);
+      system.Surface(k, xv, h);
+      return h;
+    };
+    report.entries.push_back(Compare("hx", hx, Jacobian(surface, x, step)));
+  }
+  if (cost == nullptr) return report;
+
+  Vector lx(n), lu(m);
+  Matrix lxx(n, n), luu(m, m), lux(m, n);
+  cost->RunningDerivatives(k, x, u, lx, lu, lxx, luu, lux);
+  auto l_x = [&](const Vector& xv) {
+    Vector v(1);
+    v(0) = cost->Running(k, xv, u);
+    return v;
+  };
+  auto l_u = [&](const Vector& uv) {
+    Vector v(1);
+    v(0) = cost->Running(k, x, uv);
+    return v;
+  };
+  report.entries.push_back(Compare("lx", lx.transpose(), Jacobian(l_x, x, step)));
+  report.entries.push_back(Compare("lu", lu.transpose(), Jacobian(l_u, u, step)));
+  // Second derivatives from the analytic gradients.
+  auto grad_x_of_x = [&](const Vector& xv) {
+    Vector gx(n), gu(m);
+    Matrix a(n, n), b(m, m), c(m, n);
+    cost->RunningDerivatives(k, xv, u, gx, gu, a, b, c);
+    return gx;
+  };
+  auto grad_u_of_u = [&](const Vector& uv) {
+    Vector gx(n), gu(m);
+    Matrix a(n, n), b(m, m), c(m, n);
+    cost->RunningDerivatives(k, x, uv, gx, gu, a, b, c);
+    return gu;
+  };
+  auto grad_u_of_x = [&](const Vector& xv) {
+    Vector gx(n), gu(m);
+    Matrix a(n, n), b(m, m), c(m, n);
+    cost->RunningDerivatives(k, xv, u, gx, gu, a, b, c);
+    return gu;
+  };
+  report.entries.push_back(Compare("lxx", lxx, Jacobian(grad_x_of_x, x, step)));
+  report.entries.push_back(Compare("luu", luu, Jacobian(grad_u_of_u, u, step)));
+  report.entries.push_back(Compare("lux", lux, Jacobian(grad_u_of_x, x, step)));
+
+  Vector phix(n);
+  Matrix phixx(n, n);
+  cost->SwitchingDerivatives(k, x, phix, phixx);
+  auto phi = [&](const Vector& xv) {
+    Vector v(1);
+    v(0) = cost->Switching(k, xv);
+    return v;
+  };
+  auto phi_grad = [&](const Vector& xv) {
+    Vector g(n);
+    Matrix H(n, n);
+    cost->SwitchingDerivatives(k, xv, g, H);
+    return g;
+  };
+  report.entries.push_back(Compare("phix", phix.transpose(), Jacobian(phi, x, step)));
+  report.entries.push_back(Compare("phixx", phixx, Jacobian(phi_grad, x, step)));
+  return report;
+}
+
+}  // namespace ddoc

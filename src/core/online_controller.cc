@@ -1,0 +1,207 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/online_controller.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ddoc {
+
+void OnlineController::Allocate(const Problem& problem, int max_samples,
+                                const OnlineControllerSettings& settings) {
+  problem.Validate();
+  if (max_samples < 2) {
+    throw InvalidArgument("OnlineController::Allocate: max_samples = " +
+                          std::to_string(max_samples) + ", expected >= 2");
+  }
+  problem_ = &problem;
+  settings_ = settings;
+  const SwitchedSystem& sys = *problem.system;
+  K_ = sys.num_modes();
+  m_ = sys.input_dim();
+  n_max_ = sys.max_state_dim();
+  max_samples_ = max_samples;
+  dims_.resize(K_);
+  for (int k = 0; k < K_; ++k) dims_[k] = sys.state_dim(k);
+  counts_.assign(K_, 0);
+  offsets_.assign(K_, 0);
+  cursor_.assign(K_, 0);
+  dT_.setZero(K_);
+  planned_T_.setZero(K_);
+  nominal_T_.setZero(K_);
+  planned_durations_.setOnes(K_);
+  tau_.setZero(max_samples);
+  x_.setZero(n_max_, max_samples);
+  u_.setZero(m_, max_samples);
+  Kx_.setZero(m_ * n_max_, max_samples);
+  c_.setZero(m_, max_samples);
+  luu_.setZero(m_ * m_, max_samples);
+  qp_ = BoxQP(m_, settings.qp);
+  dx_.setZero(n_max_);
+  xnom_.setZero(n_max_);
+  unom_.setZero(m_);
+  b_.setZero(m_);
+  H_.setZero(m_, m_);
+  lo_.setZero(m_);
+  hi_.setZero(m_);
+  du_.setZero(m_);
+  loaded_ = false;
+}
+
+void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass, double alpha,
+                            const ConstVectorRef& dT) {
+  if (problem_ == nullptr) throw InvalidArgument("OnlineController::Load: call Allocate first");
+  if (!pass.valid()) throw InvalidArgument("OnlineController::Load: backward pass has not run");
+  if (nominal.num_modes() != K_ || pass.num_modes() != K_ || dT.size() != K_ ||
+      nominal.T.size() != K_) {
+    throw InvalidArgument("OnlineController::Load: trajectory/pass/dT sizes do not match K = " +
+                          std::to_string(K_));
+  }
+  if (!(alpha >= 0) || !std::isfinite(alpha) || !dT.allFinite()) {
+    throw InvalidArgument("OnlineController::Load: alpha = " + std::to_string(alpha) +
+                          " must be finite and >= 0, dT finite");
+  }
+  int total = 0;
+  for (int k = 0; k < K_; ++k) {
+    const int N = nominal.modes[k].num_samples();
+    if (N != pass.num_samples(k) || nominal.modes[k].x.rows() != dims_[k]) {
+      throw InvalidArgument("OnlineController::Load: mode " + std::to_string(k) +
+                            " of the trajectory does not match the backward pass (" +
+                            std::to_string(N) + " vs " + std::to_string(pass.num_samples(k)) +
+                            " samples)");
+    }
+    offsets_[k] = total;
+    counts_[k] = N;
+    total += N;
+  }
+  if (total > max_samples_) {
+    throw InvalidArgument("OnlineController::Load: " + std::to_string(total) +
+                          " samples, more than max_samples = " + std::to_string(max_samples_));
+  }
+  alpha_ = alpha;
+  dT_ = dT;
+  nominal_T_ = nominal.T;
+  planned_T_ = nominal.T + dT;
+  for (int k = 0; k < K_; ++k) {
+    planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
+    if (!(planned_durations_(k) > 0)) {
+      throw InvalidArgument("OnlineController::Load: planned duration of mode " +
+                            std::to_string(k) + " is " + std::to_string(planned_durations_(k)) +
+                            ", expected > 0");
+    }
+  }
+  for (int k = 0; k < K_; ++k) {
+    const int n = dims_[k];
+    for (int j = 0; j < counts_[k]; ++j) {
+      const int s = offsets_[k] + j;
+      tau_(s) = pass.tau(k, j);
+      x_.col(s).head(n) = nominal.modes[k].x.col(j);
+      u_.col(s) = nominal.modes[k].u.col(j);
+      const auto gain = pass.Gain(k, j);
+      Eigen::Map<Matrix>(Kx_.col(s).data(), m_, n) = gain.leftCols(n);
+      auto c = c_.col(s);
+      c = pass.Feedforward(k, j);
+      c.noalias() += gain.rightCols(K_) * dT;
+      luu_.col(s) = Eigen::Map<const Vector>(pass.Luu(k, j).data(), m_ * m_);
+    }
+  }
+  loaded_ = true;
+  BeginTrial();
+}
+
+void OnlineController::BeginTrial() {
+  std::fill(cursor_.begin(), cursor_.end(), 0);
+  du_integral_ = 0;
+  last_tau_ = 0;
+  last_mode_ = -1;
+  last_du_sq_ = 0;
+  nonfinite_count_ = 0;
+  qp_failures_ = 0;
+  du_.setZero();
+}
+
+double OnlineController::Locate(int k, double tau, int* j_out) {
+  const int off = offsets_[k];
+  const int N = counts_[k];
+  int j = std::min(cursor_[k], N - 2);
+  while (j > 0 && tau_(off + j) > tau) --j;
+  while (j < N - 2 && tau_(off + j + 1) < tau) ++j;
+  cursor_[k] = j;
+  *j_out = j;
+  const double span = tau_(off + j + 1) - tau_(off + j);
+  if (!settings_.interpolate) return tau >= tau_(off + j + 1) ? 1.0 : 0.0;
+  double w = span > 0 ? (tau - tau_(off + j)) / span : 1.0;
+  return std::min(std::max(w, 0.0), 1.0);
+}
+
+void OnlineController::Accumulate(int k, double tau) {
+  // Left Riemann sum of |du|^2 over tau: the previous du was held until now.
+  if (last_mode_ == k && tau > last_tau_) du_integral_ += last_du_sq_ * (tau - last_tau_);
+  last_du_sq_ = du_.squaredNorm();
+  last_tau_ = tau;
+  last_mode_ = k;
+}
+
+void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorRef& x_measured,
+                            VectorRef u_out) {
+  if (!loaded_) throw InvalidArgument("OnlineController::Step: no control law loaded");
+  if (k < 0 || k >= K_) {
+    throw InvalidArgument("OnlineController::Step: mode k = " + std::to_string(k) +
+                          " out of range [0, " + std::to_string(K_) + ")");
+  }
+  const int n = dims_[k];
+  if (x_measured.size() != n || u_out.size() != m_) {
+    throw InvalidArgument("OnlineController::Step(k=" + std::to_string(k) + "): x has size " +
+                          std::to_string(x_measured.size()) + " (expected " + std::to_string(n) +
+                          "), u has size " + std::to_string(u_out.size()) + " (expected " +
+                          std::to_string(m_) + ")");
+  }
+  const Vector& umin = problem_->bounds.u_min;
+  const Vector& umax = problem_->bounds.u_max;
+  const bool finite_time = std::isfinite(t_since_mode_start);
+  const double tau = NormalizedTime(k, finite_time ? t_since_mode_start : 0.0,
+                                    planned_durations_(k));
+  int j = 0;
+  const double w = Locate(k, tau, &j);
+  const int s0 = offsets_[k] + j;
+  const int s1 = s0 + 1;
+  // Nominal input at tau.
+  unom_ = (1.0 - w) * u_.col(s0) + w * u_.col(s1);
+  if (!finite_time || !x_measured.allFinite()) {
+    ++nonfinite_count_;
+    du_.setZero();
+    u_out = unom_.cwiseMax(umin).cwiseMin(umax);
+    Accumulate(k, tau);
+    return;
+  }
+  // dx and b of (34): b = (1-w)(Kx_0 dx + c_0) + w (Kx_1 dx + c_1).
+  auto dx = dx_.head(n);
+  dx = x_measured - ((1.0 - w) * x_.col(s0).head(n) + w * x_.col(s1).head(n));
+  Eigen::Map<const Matrix> K0(Kx_.col(s0).data(), m_, n);
+  Eigen::Map<const Matrix> K1(Kx_.col(s1).data(), m_, n);
+  b_ = (1.0 - w) * c_.col(s0) + w * c_.col(s1);
+  b_.noalias() += (1.0 - w) * K0 * dx;
+  b_.noalias() += w * K1 * dx;
+  b_ *= alpha_;
+  // H = L_uu(tau) + mu I.
+  H_ = (1.0 - w) * Eigen::Map<const Matrix>(luu_.col(s0).data(), m_, m_) +
+       w * Eigen::Map<const Matrix>(luu_.col(s1).data(), m_, m_);
+  const double mu = settings_.regularization * (1.0 + H_.diagonal().cwiseAbs().maxCoeff());
+  H_.diagonal().array() += mu;
+  lo_ = umin - unom_;
+  hi_ = umax - unom_;
+  // The nominal can sit slightly outside the box (interpolation, measured inputs).
+  lo_ = lo_.cwiseMin(0.0);
+  hi_ = hi_.cwiseMax(0.0);
+  if (!settings_.warm_start) du_.setZero();
+  const BoxQPStatus status = qp_.Solve(H_, b_, lo_, hi_, du_);
+  if (status != BoxQPStatus::kConverged) ++qp_failures_;
+  if (!du_.allFinite()) {
+    du_.setZero();
+    ++qp_failures_;
+  }
+  u_out = (unom_ + du_).cwiseMax(umin).cwiseMin(umax);
+  // int |du|^2 dtau (left Riemann sum within a mode).
+  Accumulate(k, tau);
+}
+
+}  // namespace ddoc
