@@ -267,6 +267,12 @@ void OffscreenRenderer::Render(const mjModel* m, mjData* d, const std::string& o
   if (track_body_id_ >= 0) camera_.lookat[0] = d->xpos[3 * track_body_id_];
 
   // Abstract scene from the poses in d (reads mjData; uses only its scratch stack).
+  // mjv_updateScene adds the geoms BEFORE it updates the scene camera, and it tessellates
+  // planes around the camera position it finds in the scene, i.e. the previous frame's
+  // (measured: the first frame differed from later renders of the same state by +-3
+  // levels over the floor). Updating the camera first makes each image a function of the
+  // current state only.
+  mjv_updateCamera(m, d, &camera_, &scene_);
   mjv_updateScene(m, d, &option_, nullptr, &camera_, mjCAT_ALL, &scene_);
   if (grid_plane_geom_ >= 0) AddGridLines(m);
 

@@ -1,0 +1,127 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// AssembleVideo: an MP4 from recorded frames when ffmpeg is installed; a clear message
+// when it is not, when there are no frames, or when fps is bad.
+#include "ddoc/render/video.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include "ddoc/render/frame_recorder.h"
+#include "render_test_util.h"
+
+namespace ddoc {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RenderTest;
+
+// Sets PATH for the lifetime of the object.
+class ScopedPath {
+ public:
+  explicit ScopedPath(const std::string& value) {
+    const char* old = std::getenv("PATH");
+    had_ = old != nullptr;
+    if (had_) old_ = old;
+    setenv("PATH", value.c_str(), 1);
+  }
+  ~ScopedPath() {
+    if (had_) {
+      setenv("PATH", old_.c_str(), 1);
+    } else {
+      unsetenv("PATH");
+    }
+  }
+
+ private:
+  bool had_ = false;
+  std::string old_;
+};
+
+class VideoTest : public RenderTest {
+ protected:
+  // Records 0.25 s at 20 fps (6 frames) of the pushed test model into dir_/frames.
+  void RecordFrames() {
+    auto m = testing::LoadModel(testing::TestModelXml(true));
+    auto d = testing::MakeData(m.get());
+    RenderSettings s;
+    s.dir = (dir_ / "frames").string();
+    s.width = 95;  // odd sizes: AssembleVideo pads to even for yuv420p
+    s.height = 71;
+    s.fps = 20;
+    std::string error;
+    auto rec = FrameRecorder::Create(m.get(), s, &error);
+    ASSERT_NE(rec, nullptr) << error;
+    rec->MaybeCapture(m.get(), d.get(), Overlay());
+    while (d->time < 0.25 - 1e-9) {
+      d->ctrl[0] = 1;
+      mj_step(m.get(), d.get());
+      rec->MaybeCapture(m.get(), d.get(), Overlay());
+    }
+    ASSERT_TRUE(rec->Finish(&error)) << error;
+    ASSERT_EQ(rec->frame_count(), 6);
+  }
+};
+
+TEST_F(VideoTest, FindExecutableSearchesThePathList) {
+  fs::create_directories(dir_ / "bin");
+  const fs::path tool = dir_ / "bin" / "mytool";
+  std::ofstream(tool) << "#!/bin/sh\n";
+  EXPECT_EQ(FindExecutable("mytool", "/nonexistent:" + (dir_ / "bin").string()), "");  // not +x
+  ::chmod(tool.c_str(), 0755);
+  EXPECT_EQ(FindExecutable("mytool", "/nonexistent:" + (dir_ / "bin").string()), tool.string());
+  EXPECT_EQ(FindExecutable("mytool", "/nonexistent"), "");
+  EXPECT_EQ(FindExecutable("mytool", ""), "");
+}
+
+TEST_F(VideoTest, SaysClearlyWhenFfmpegIsNotInstalled) {
+  RecordFrames();
+  const std::string mp4 = (dir_ / "out.mp4").string();
+  std::string message;
+  {
+    ScopedPath no_ffmpeg((dir_ / "empty_bin").string());
+    EXPECT_FALSE(AssembleVideo((dir_ / "frames").string(), 20, mp4, &message));
+  }
+  EXPECT_NE(message.find("ffmpeg is not installed"), std::string::npos) << message;
+  EXPECT_NE(message.find((dir_ / "frames").string()), std::string::npos)
+      << "should say where the frames are: " << message;
+  EXPECT_FALSE(fs::exists(mp4));
+}
+
+TEST_F(VideoTest, RejectsMissingFramesAndBadFps) {
+  std::string message;
+  EXPECT_FALSE(AssembleVideo((dir_ / "nothing").string(), 60, (dir_ / "a.mp4").string(),
+                             &message));
+  EXPECT_NE(message.find("no frames to assemble"), std::string::npos) << message;
+  EXPECT_FALSE(AssembleVideo((dir_ / "nothing").string(), 0, (dir_ / "a.mp4").string(),
+                             &message));
+  EXPECT_NE(message.find("fps must be > 0"), std::string::npos) << message;
+}
+
+TEST_F(VideoTest, AssemblesAnMp4WhenFfmpegIsInstalled) {
+  const char* path = std::getenv("PATH");
+  if (FindExecutable("ffmpeg", path ? path : "").empty()) {
+    GTEST_SKIP() << "ffmpeg is not installed";
+  }
+  RecordFrames();
+  const fs::path mp4 = dir_ / "video dir" / "out.mp4";  // a space: no shell quoting issues
+  fs::create_directories(mp4.parent_path());
+  std::string message;
+  ASSERT_TRUE(AssembleVideo((dir_ / "frames").string(), 20, mp4.string(), &message)) << message;
+  EXPECT_NE(message.find("wrote"), std::string::npos) << message;
+  ASSERT_TRUE(fs::exists(mp4));
+  EXPECT_GT(fs::file_size(mp4), 500u);
+  // An MP4 file has an 'ftyp' box right after the first 4-byte size field.
+  std::ifstream in(mp4, std::ios::binary);
+  char head[8] = {};
+  in.read(head, 8);
+  EXPECT_EQ(std::string(head + 4, 4), "ftyp");
+}
+
+}  // namespace
+}  // namespace ddoc
