@@ -1,0 +1,153 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/hopper/nominal_gait.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "ddoc/hopper/hopper_cost.h"
+
+namespace ddoc {
+
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+// The Q-weighted entries of I1 (Fig. 2): theta, phi, xd, yd, thetad, phid.
+constexpr int kWeighted[6] = {hopper::kTheta, hopper::kPhi, hopper::kXd,
+                              hopper::kYd,    hopper::kThetad, hopper::kPhid};
+
+/// Builds (x0, u0) from the search variables p.
+void Assemble(const HopperParams& prm, const NominalGaitSettings& s, double speed, const Vec6& p,
+              Eigen::Matrix<double, 14, 1>* x0, Eigen::Vector4d* u0) {
+  using namespace hopper;  // NOLINT
+  *u0 << p(5), 0.0, s.k0_hip, s.k0_leg;
+  x0->setZero();
+  const double r = prm.r0;  // F0 = 0: the leg is at its natural length at takeoff
+  (*x0)(kX) = -r * std::sin(p(0));
+  (*x0)(kY) = r * std::cos(p(0));
+  (*x0)(kTheta) = p(0);
+  (*x0)(kPhi) = p(1);
+  (*x0)(kR) = r;
+  (*x0)(kKhip) = s.k0_hip;
+  (*x0)(kKleg) = s.k0_leg;
+  (*x0)(kXd) = speed;
+  (*x0)(kYd) = p(2);
+  (*x0)(kThetad) = p(3);
+  (*x0)(kPhid) = p(4);
+}
+
+/// sqrt(Q)-weighted periodicity residual; a failed hop gives a large residual.
+Vec6 Residual(const HopperModel& model, const HopperCostWeights& w, const NominalGaitSettings& s,
+              double speed, const Vec6& p, HopResult* hop_out) {
+  Eigen::Matrix<double, 14, 1> x0;
+  Eigen::Vector4d u0;
+  Assemble(model.params(), s, speed, p, &x0, &u0);
+  HopSimSettings hs;
+  hs.dt = s.dt;
+  HopResult hop = SimulateHop(model, x0, u0, hs);
+  Vec6 res;
+  if (!hop.ok) {
+    res.setConstant(1e3);
+  } else {
+    for (int i = 0; i < 6; ++i) {
+      const int j = kWeighted[i];
+      res(i) = std::sqrt(w.q_diag(j)) * (hop.x_to_plus(j) - x0(j));
+    }
+  }
+  if (hop_out) *hop_out = hop;
+  return res;
+}
+
+/// Levenberg-Marquardt on Residual with a central-difference Jacobian.
+Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGaitSettings& s,
+           double speed, Vec6 p) {
+  double lambda = 1e-3;
+  Vec6 res = Residual(model, w, s, speed, p, nullptr);
+  for (int it = 0; it < s.max_iterations; ++it) {
+    Mat6 jac;
+    for (int i = 0; i < 6; ++i) {
+      const double h = 1e-6 * std::max(1.0, std::abs(p(i)));
+      Vec6 pp = p, pm = p;
+      pp(i) += h;
+      pm(i) -= h;
+      jac.col(i) = (Residual(model, w, s, speed, pp, nullptr) -
+                    Residual(model, w, s, speed, pm, nullptr)) / (2.0 * h);
+    }
+    const Mat6 jtj = jac.transpose() * jac;
+    const Vec6 jtr = jac.transpose() * res;
+    bool improved = false;
+    for (int tries = 0; tries < 12; ++tries) {
+      Mat6 a = jtj;
+      a.diagonal() += lambda * (jtj.diagonal().array() + 1e-9).matrix();
+      const Vec6 step = -a.ldlt().solve(jtr);
+      const Vec6 p_new = p + step;
+      const Vec6 res_new = Residual(model, w, s, speed, p_new, nullptr);
+      if (res_new.squaredNorm() < res.squaredNorm()) {
+        p = p_new;
+        res = res_new;
+        lambda = std::max(lambda * 0.3, 1e-9);
+        improved = true;
+        break;
+      }
+      lambda *= 10.0;
+    }
+    if (!improved || res.squaredNorm() < 1e-20) break;
+  }
+  return p;
+}
+
+}  // namespace
+
+NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSettings& s) {
+  params.Validate();
+  const Eigen::Vector4d lo = hopper::InputLowerBound();
+  const Eigen::Vector4d hi = hopper::InputUpperBound();
+  if (!(s.k0_hip >= lo(2) && s.k0_hip <= hi(2) && s.k0_leg >= lo(3) && s.k0_leg <= hi(3))) {
+    throw InvalidArgument("FindNominalGait: k0_hip = " + std::to_string(s.k0_hip) +
+                          ", k0_leg = " + std::to_string(s.k0_leg) +
+                          ", expected within [10, 150] and [1780, 2350]");
+  }
+  if (!(s.apex_height > params.r0) || !(s.dt > 0.0) || s.continuation_stages < 1 ||
+      !std::isfinite(s.forward_speed)) {
+    throw InvalidArgument("FindNominalGait: need apex_height > r0 (" +
+                          std::to_string(s.apex_height) + "), dt > 0, continuation_stages >= 1");
+  }
+  const HopperModel model(params);
+  const HopperCostWeights w;
+  // Start from vertical hopping in place (exactly periodic: theta = 0 gives v_f_theta = 0) and
+  // ramp the forward speed, re-solving at each stage.
+  Vec6 p;
+  p << 0.0, 0.0, std::sqrt(2.0 * params.g * (s.apex_height - params.r0)), 0.0, 0.0, 0.0;
+  for (int stage = 1; stage <= s.continuation_stages; ++stage) {
+    const double speed = s.forward_speed * stage / s.continuation_stages;
+    p = Solve(model, w, s, speed, p);
+  }
+  NominalGait g;
+  Assemble(params, s, s.forward_speed, p, &g.x0, &g.u0);
+  // u0[0] = tau0 must respect the bounds; clamp (the search rarely leaves them).
+  g.u0 = g.u0.cwiseMax(lo).cwiseMin(hi);
+  HopSimSettings hs;
+  hs.dt = s.dt;
+  g.hop = SimulateHop(model, g.x0, g.u0, hs);
+  if (!g.hop.ok) {
+    throw InvalidArgument("FindNominalGait: the final hop failed (" + g.hop.message + ")");
+  }
+  g.T0 << g.hop.t1, g.hop.t2;
+  HopperCost cost(model, w);
+  cost.SetReference(g.x0);
+  g.periodicity = cost.Switching(hopper::kStance, g.hop.x_to_minus);
+  for (int j : kWeighted) {
+    g.max_abs_residual = std::max(g.max_abs_residual, std::abs(g.hop.x_to_plus(j) - g.x0(j)));
+  }
+  g.apex = g.hop.apex;
+  g.stance_time = g.hop.t2 - g.hop.t1;
+  g.period = g.hop.t2;
+  g.forward_speed = g.x0(hopper::kXd);
+  g.step_length = g.hop.x_to_plus(hopper::kX) - g.x0(hopper::kX);
+  g.energy_loss = model.ImpactEnergyLoss(g.hop.x_td_minus);
+  return g;
+}
+
+}  // namespace ddoc
