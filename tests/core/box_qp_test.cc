@@ -1,0 +1,186 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// BoxQP against the KKT conditions and against brute-force enumeration of active sets.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/box_qp.h"
+#include "malloc_counter.h"
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+double Objective(const Matrix& H, const Vector& g, const Vector& x) {
+  return 0.5 * x.dot(H * x) + g.dot(x);
+}
+
+// Brute force: every assignment of each variable to {lower, upper, free}; solve the free block,
+// keep the feasible point with the lowest objective.
+Vector BruteForce(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi) {
+  const int n = static_cast<int>(g.size());
+  int combos = 1;
+  for (int i = 0; i < n; ++i) combos *= 3;
+  Vector best;
+  double best_value = 1e300;
+  for (int c = 0; c < combos; ++c) {
+    Vector x = Vector::Zero(n);
+    std::vector<int> free_idx;
+    int code = c;
+    for (int i = 0; i < n; ++i) {
+      const int s = code % 3;
+      code /= 3;
+      if (s == 0) x(i) = lo(i);
+      if (s == 1) x(i) = hi(i);
+      if (s == 2) free_idx.push_back(i);
+    }
+    const int nf = static_cast<int>(free_idx.size());
+    if (nf > 0) {
+      Matrix Hff(nf, nf);
+      Vector rhs(nf);
+      for (int a = 0; a < nf; ++a) {
+        rhs(a) = -g(free_idx[a]);
+        for (int i = 0; i < n; ++i) {
+          bool is_free = false;
+          for (int f : free_idx) is_free |= (f == i);
+          if (!is_free) rhs(a) -= H(free_idx[a], i) * x(i);
+        }
+        for (int b = 0; b < nf; ++b) Hff(a, b) = H(free_idx[a], free_idx[b]);
+      }
+      const Vector xf = Hff.ldlt().solve(rhs);
+      for (int a = 0; a < nf; ++a) x(free_idx[a]) = xf(a);
+    }
+    bool feasible = true;
+    for (int i = 0; i < n; ++i) feasible &= x(i) >= lo(i) - 1e-12 && x(i) <= hi(i) + 1e-12;
+    if (feasible && Objective(H, g, x) < best_value) {
+      best_value = Objective(H, g, x);
+      best = x;
+    }
+  }
+  return best;
+}
+
+// KKT residual of a box QP: free components need grad = 0, lower-bound components grad >= 0,
+// upper-bound components grad <= 0.
+double KktResidual(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi,
+                   const Vector& x) {
+  const Vector grad = H * x + g;
+  double worst = 0;
+  for (int i = 0; i < x.size(); ++i) {
+    if (x(i) < lo(i) - 1e-14 || x(i) > hi(i) + 1e-14) return 1e300;  // infeasible
+    double r;
+    if (x(i) <= lo(i)) {
+      r = std::max(0.0, -grad(i));
+    } else if (x(i) >= hi(i)) {
+      r = std::max(0.0, grad(i));
+    } else {
+      r = std::abs(grad(i));
+    }
+    worst = std::max(worst, r);
+  }
+  return worst;
+}
+
+struct Case {
+  Matrix H;
+  Vector g, lo, hi;
+};
+
+Case RandomCase(std::mt19937* rng, int n, double box) {
+  std::normal_distribution<double> normal;
+  Case c;
+  Matrix M(n, n);
+  for (int i = 0; i < n * n; ++i) M.data()[i] = normal(*rng);
+  c.H = M * M.transpose() + 0.1 * Matrix::Identity(n, n);
+  c.g.resize(n);
+  c.lo.resize(n);
+  c.hi.resize(n);
+  for (int i = 0; i < n; ++i) {
+    c.g(i) = 3.0 * normal(*rng);
+    c.lo(i) = -box * (0.2 + std::abs(normal(*rng)));
+    c.hi(i) = box * (0.2 + std::abs(normal(*rng)));
+  }
+  return c;
+}
+
+TEST(BoxQP, MatchesBruteForceAndKkt) {
+  std::mt19937 rng(3);
+  int with_active = 0, all_inactive = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 1 + trial % 6;
+    const double box = trial % 4 == 0 ? 100.0 : 0.5;  // wide boxes: unconstrained optimum
+    const Case c = RandomCase(&rng, n, box);
+    BoxQP qp(8);
+    Vector x = Vector::Zero(n);
+    ASSERT_EQ(qp.Solve(c.H, c.g, c.lo, c.hi, x), BoxQPStatus::kConverged) << "trial " << trial;
+    const Vector ref = BruteForce(c.H, c.g, c.lo, c.hi);
+    EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial;
+    EXPECT_LT(KktResidual(c.H, c.g, c.lo, c.hi, x), 1e-9) << "trial " << trial;
+    int active = 0;
+    for (int i = 0; i < n; ++i) active += (x(i) <= c.lo(i) || x(i) >= c.hi(i));
+    (active > 0 ? with_active : all_inactive)++;
+  }
+  // Both regimes were exercised.
+  EXPECT_GT(with_active, 50);
+  EXPECT_GT(all_inactive, 20);
+}
+
+TEST(BoxQP, UnconstrainedOptimumIsTheNewtonStep) {
+  Matrix H(2, 2);
+  H << 4, 1, 1, 3;
+  Vector g(2);
+  g << 1, -2;
+  Vector lo = Vector::Constant(2, -10), hi = Vector::Constant(2, 10), x = Vector::Zero(2);
+  BoxQP qp(2);
+  ASSERT_EQ(qp.Solve(H, g, lo, hi, x), BoxQPStatus::kConverged);
+  const Vector exact = -H.llt().solve(g);
+  EXPECT_LT((x - exact).norm(), 1e-12);
+}
+
+TEST(BoxQP, WarmStartFromAnyPointAndFixedVariables) {
+  std::mt19937 rng(5);
+  const Case c = RandomCase(&rng, 5, 0.3);
+  BoxQP qp(5);
+  Vector cold = Vector::Zero(5);
+  qp.Solve(c.H, c.g, c.lo, c.hi, cold);
+  Vector warm = Vector::Constant(5, 7.0);  // infeasible start gets clamped
+  qp.Solve(c.H, c.g, c.lo, c.hi, warm);
+  EXPECT_LT((warm - cold).norm(), 1e-9);
+  // lo == hi fixes a variable.
+  Vector lo = c.lo, hi = c.hi;
+  lo(2) = hi(2) = 0.1;
+  Vector x = Vector::Zero(5);
+  EXPECT_EQ(qp.Solve(c.H, c.g, lo, hi, x), BoxQPStatus::kConverged);
+  EXPECT_EQ(x(2), 0.1);
+  EXPECT_LT((x - BruteForce(c.H, c.g, lo, hi)).norm(), 1e-8);
+}
+
+TEST(BoxQP, ReportsIndefiniteHessianAndBadInput) {
+  Matrix H(2, 2);
+  H << 1, 0, 0, -1;
+  Vector g = Vector::Zero(2), lo = Vector::Constant(2, -1), hi = Vector::Constant(2, 1);
+  Vector x = Vector::Constant(2, 0.5);
+  BoxQP qp(2);
+  EXPECT_EQ(qp.Solve(H, g, lo, hi, x), BoxQPStatus::kNotPositiveDefinite);
+  Vector bad_lo = lo;
+  bad_lo(1) = 2;  // lo > hi
+  EXPECT_THROW(qp.Solve(Matrix::Identity(2, 2), g, bad_lo, hi, x), InvalidArgument);
+  Vector big = Vector::Zero(3);
+  EXPECT_THROW(qp.Solve(Matrix::Identity(3, 3), big, big, big, big), InvalidArgument);
+}
+
+TEST(BoxQP, SolveDoesNotAllocate) {
+  ASSERT_TRUE(MallocCountingWorks());
+  std::mt19937 rng(9);
+  const Case c = RandomCase(&rng, 20, 0.2);
+  BoxQP qp(20);
+  Vector x = Vector::Zero(20);
+  MallocCounter counter;
+  qp.Solve(c.H, c.g, c.lo, c.hi, x);
+  EXPECT_EQ(counter.count(), 0);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc

@@ -1,0 +1,29 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Counts heap allocations (malloc/calloc/realloc/new) of the whole test process by
+// interposing glibc's malloc family (Drake LimitMalloc-style).
+#ifndef DDOC_TESTS_CORE_MALLOC_COUNTER_H_
+#define DDOC_TESTS_CORE_MALLOC_COUNTER_H_
+
+namespace ddoc {
+namespace testing {
+
+/// Allocations counted while at least one MallocCounter is alive.
+class MallocCounter {
+ public:
+  MallocCounter();
+  ~MallocCounter();
+  /// Allocations since construction.
+  long count() const;
+
+ private:
+  long start_;
+};
+
+/// True when the interposition works in this process (a probe allocation was counted).
+bool MallocCountingWorks();
+
+}  // namespace testing
+}  // namespace ddoc
+
+#endif  // DDOC_TESTS_CORE_MALLOC_COUNTER_H_

@@ -1,0 +1,172 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Switched systems and costs shared by the core tests.
+#ifndef DDOC_TESTS_CORE_TEST_SYSTEMS_H_
+#define DDOC_TESTS_CORE_TEST_SYSTEMS_H_
+
+#include <cmath>
+#include <vector>
+
+#include "ddoc/autodiff.h"
+#include "ddoc/problem.h"
+
+namespace ddoc {
+namespace testing {
+
+/// xdot = A_k x + B_k u + c_k, x+ = E_k x, optional affine surface h_k = C_k x - d_k (s_k rows).
+/// Hand-written derivatives.
+class LinearSwitchedSystem : public SwitchedSystem {
+ public:
+  LinearSwitchedSystem(std::vector<Matrix> A, std::vector<Matrix> B, std::vector<Matrix> E,
+                       std::vector<Matrix> C = {}, std::vector<Vector> d = {},
+                       std::vector<Vector> c = {})
+      : SwitchedSystem(Dims(A), static_cast<int>(B[0].cols()), SurfaceDims(A, C)),
+        A_(std::move(A)), B_(std::move(B)), E_(std::move(E)), C_(std::move(C)), d_(std::move(d)),
+        c_(std::move(c)) {}
+
+  std::vector<Matrix> A_, B_, E_, C_;
+  std::vector<Vector> d_, c_;
+
+ protected:
+  static std::vector<int> Dims(const std::vector<Matrix>& A) {
+    std::vector<int> n;
+    for (const auto& a : A) n.push_back(static_cast<int>(a.rows()));
+    return n;
+  }
+  static std::vector<int> SurfaceDims(const std::vector<Matrix>& A, const std::vector<Matrix>& C) {
+    std::vector<int> s(A.size(), 0);
+    for (size_t k = 0; k < C.size(); ++k) s[k] = static_cast<int>(C[k].rows());
+    return s;
+  }
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+              VectorRef xdot) const override {
+    xdot.noalias() = A_[k] * x;
+    xdot.noalias() += B_[k] * u;
+    if (!c_.empty()) xdot += c_[k];
+  }
+  void DoFlowDerivatives(int k, const ConstVectorRef&, const ConstVectorRef&, MatrixRef fx,
+                         MatrixRef fu) const override {
+    fx = A_[k];
+    fu = B_[k];
+  }
+  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
+    x_next.noalias() = E_[k] * x;
+  }
+  void DoResetDerivative(int k, const ConstVectorRef&, MatrixRef gx) const override {
+    gx = E_[k];
+  }
+  void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override {
+    h.noalias() = C_[k] * x;
+    h -= d_[k];
+  }
+  void DoSurfaceDerivative(int k, const ConstVectorRef&, MatrixRef hx) const override {
+    hx = C_[k];
+  }
+};
+
+/// l_k = 1/2 x'Q_k x + 1/2 u'R_k u + rho_k,  phi_k = 1/2 (x - r_k)' S_k (x - r_k).
+class QuadraticCost : public SwitchedCost {
+ public:
+  QuadraticCost(std::vector<Matrix> Q, std::vector<Matrix> R, std::vector<double> rho,
+                std::vector<Matrix> S, std::vector<Vector> r)
+      : Q_(std::move(Q)), R_(std::move(R)), rho_(std::move(rho)), S_(std::move(S)),
+        r_(std::move(r)) {}
+  std::vector<Matrix> Q_, R_;
+  std::vector<double> rho_;
+  std::vector<Matrix> S_;
+  std::vector<Vector> r_;
+
+ protected:
+  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    return 0.5 * x.dot(Q_[k] * x) + 0.5 * u.dot(R_[k] * u) + rho_[k];
+  }
+  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
+                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                            MatrixRef lux) const override {
+    lx.noalias() = Q_[k] * x;
+    lu.noalias() = R_[k] * u;
+    lxx = Q_[k];
+    luu = R_[k];
+    lux.setZero();
+  }
+  double DoSwitching(int k, const ConstVectorRef& x) const override {
+    const Vector e = x - r_[k];
+    return 0.5 * e.dot(S_[k] * e);
+  }
+  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                              MatrixRef phixx) const override {
+    phix.noalias() = S_[k] * (x - r_[k]);
+    phixx = S_[k];
+  }
+};
+
+/// A nonlinear 3-mode system with state dims 3, 2, 3 (rectangular resets), m = 2, an affine
+/// surface on mode 0 and a nonlinear one on mode 2. Written once, derivatives by AutoDiff.
+class NonlinearSystem : public AutoDiffSystem<NonlinearSystem> {
+ public:
+  explicit NonlinearSystem(double gain = 1.0)
+      : AutoDiffSystem<NonlinearSystem>({3, 2, 3}, 2, {1, 0, 1}), gain_(gain) {}
+  double gain_;
+
+  template <class S>
+  void Dynamics(int k, const VectorX<S>& x, const VectorX<S>& u, VectorX<S>& xdot) const {
+    using std::cos;
+    using std::sin;
+    if (k == 0) {
+      xdot(0) = x(1);
+      xdot(1) = -sin(x(0)) + gain_ * u(0) * (1.0 + 0.1 * x(2) * x(2));
+      xdot(2) = u(1) - 0.5 * x(2) * x(1);
+    } else if (k == 1) {
+      xdot(0) = x(1) + 0.2 * u(1);
+      xdot(1) = -x(0) - 0.1 * x(1) * x(1) * x(1) + gain_ * u(0);
+    } else {
+      xdot(0) = x(1);
+      xdot(1) = -2.0 * x(0) + gain_ * u(0) + 0.3 * u(1) * x(2);
+      xdot(2) = -x(2) + 0.1 * u(1) * u(1);
+    }
+  }
+  template <class S>
+  void ResetMap(int k, const VectorX<S>& x, VectorX<S>& x_next) const {
+    using std::cos;
+    using std::sin;
+    if (k == 0) {
+      x_next(0) = x(0) + 0.1 * x(2) * x(2);
+      x_next(1) = x(1) * cos(x(2));
+    } else {
+      x_next(0) = x(0);
+      x_next(1) = x(1);
+      x_next(2) = sin(x(0) * x(1));
+    }
+  }
+  template <class S>
+  void SurfaceMap(int k, const VectorX<S>& x, VectorX<S>& h) const {
+    if (k == 0) {
+      h(0) = x(0) + 0.5 * x(1) - 0.5;  // affine: the Gauss-Newton Phi_zz is exact
+    } else {
+      h(0) = x(0) * x(0) + x(2) - 0.2;
+    }
+  }
+};
+
+/// A non-quadratic cost for NonlinearSystem, derivatives by nested AutoDiff.
+class NonlinearCost : public AutoDiffCost<NonlinearCost> {
+ public:
+  template <class S>
+  S RunningCost(int k, const VectorX<S>& x, const VectorX<S>& u) const {
+    using std::cos;
+    S value = 0.5 * x.squaredNorm() + 0.05 * (k + 1) * u.squaredNorm() +
+              0.1 * x(0) * x(0) * u(0) * u(0) + 0.05 * cos(x(1)) + 0.3;
+    return value;
+  }
+  template <class S>
+  S SwitchingCost(int k, const VectorX<S>& x) const {
+    S value = 0.1 * x(0) * x(0) * x(0) + 0.02 * (k + 1) * x(0);
+    for (int i = 0; i < x.size(); ++i) value += 0.5 * (x(i) - 0.3) * (x(i) - 0.3);
+    return value;
+  }
+};
+
+}  // namespace testing
+}  // namespace ddoc
+
+#endif  // DDOC_TESTS_CORE_TEST_SYSTEMS_H_
