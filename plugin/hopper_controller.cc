@@ -1,0 +1,349 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "hopper_controller.h"
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <sstream>
+
+#include "ddoc/cost.h"
+#include "ddoc/policy.h"
+
+namespace ddoc::plugin {
+namespace {
+
+Bounds HopperBounds(const ControllerConfig& c) {
+  Bounds b;
+  b.u_min = hopper::InputLowerBound();
+  b.u_max = hopper::InputUpperBound();
+  b.duration_min = Eigen::Vector2d(c.flight_min, c.stance_min);
+  b.duration_max = Eigen::Vector2d(c.flight_max, c.stance_max);
+  return b;
+}
+
+// True when a contact between the foot geom and the floor geom exists in the current collision
+// pass (computed by mj_fwdPosition before mjcb_control) with distance below `distance`.
+bool FootTouches(const HopperMapping& map, const mjData* d, double distance) {
+  for (int i = 0; i < d->ncon; ++i) {
+    const mjContact& c = d->contact[i];
+    const bool pair = (c.geom1 == map.geom_foot && c.geom2 == map.geom_floor) ||
+                      (c.geom2 == map.geom_foot && c.geom1 == map.geom_floor);
+    if (pair && c.dist < distance) return true;
+  }
+  return false;
+}
+
+HopperController* g_attached = nullptr;
+
+void ControlCallback(const mjModel* m, mjData* d) {
+  if (g_attached != nullptr) g_attached->Compute(m, d);
+}
+
+}  // namespace
+
+HopperController::HopperController(const mjModel* m, const ControllerConfig& config)
+    : config_(config),
+      map_(HopperMapping::Build(m, "the robot's mjModel")),
+      model_(config.model),
+      cost_(model_),
+      problem_{&model_, &cost_, HopperBounds(config),
+               Eigen::Vector2d(cost_.weights().surface_weight, 0.0)},
+      model_plant_(problem_),
+      vsa_(map_.beta) {}
+
+std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
+                                                           const ControllerConfig& config,
+                                                           std::string* error) {
+  std::string local;
+  std::string* err = error != nullptr ? error : &local;
+  if (m == nullptr) {
+    *err = "HopperController::Create: mjModel is null";
+    return nullptr;
+  }
+  try {
+    std::unique_ptr<HopperController> c(new HopperController(m, config));
+    c->Initialize();
+    return c;
+  } catch (const std::exception& e) {
+    *err = std::string("HopperController::Create: ") + e.what();
+    return nullptr;
+  }
+}
+
+void HopperController::Initialize() {
+  const ControllerConfig& c = config_;
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      std::ostringstream msg;
+      msg << "config." << name << " must be a finite number > 0, got " << v;
+      throw InvalidArgument(msg.str());
+    }
+  };
+  positive(c.dt_model, "dt_model");
+  positive(c.min_phase_time, "min_phase_time");
+  positive(c.takeoff_force, "takeoff_force");
+  if (c.max_samples_per_mode < 10) {
+    throw InvalidArgument("config.max_samples_per_mode must be >= 10, got " +
+                          std::to_string(c.max_samples_per_mode));
+  }
+  problem_.Validate();  // duration bounds: reversed or non-positive -> named error
+
+  model_plant_.settings().dt = c.dt_model;
+  model_plant_.set_guard([this](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
+    return model_.Guard(k, x, u);
+  });
+
+  // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
+  gait_ = FindNominalGait(config_.model, config_.gait);
+  cost_.SetReference(gait_.x0);
+  model_learner_ = std::make_unique<Learner>(problem_, config_.model_learner);
+  const Eigen::Vector2d durations(gait_.T0(0), gait_.T0(1) - gait_.T0(0));
+  const Eigen::Vector4d u0 = gait_.u0;
+  FunctionPolicy initial(durations, [u0](int, double, const ConstVectorRef&, VectorRef u) {
+    u = u0;
+  });
+  const SolveResult solved =
+      model_learner_->Solve(model_plant_, model_plant_, gait_.x0, initial);
+  model_cost_ = solved.cost;
+  model_iterations_ = solved.iterations;
+  if (!std::isfinite(model_cost_)) {
+    throw InvalidArgument("the model-based initial solve produced a non-finite cost");
+  }
+  recorder_.Reserve(model_, config_.max_samples_per_mode);
+}
+
+void HopperController::Reset(const mjModel* m, mjData* d) {
+  mj_resetData(m, d);
+  VsaState vs;
+  WriteFlightState(map_, gait_.x0.data(), d, &vs);
+  vsa_.Reset(vs);
+  d->time = 0.0;
+  mode_ = hopper::kFlight;
+  hop_ = 0;
+  started_ = false;
+  failed_ = false;
+  error_.clear();
+  reports_.clear();
+  nonfinite_steps_ = 0;
+  have_prev_td_ = false;
+  last_event_ = -1e9;
+  u_ = gait_.u0;
+  learner_.reset();
+  if (config_.method != Method::kOcfb) {
+    learner_ = std::make_unique<Learner>(problem_, config_.learner);
+  }
+  policy_ = &model_learner_->ConvergedPolicy();
+  policy_->BeginTrial();
+}
+
+std::vector<HopReport> HopperController::TakeReports() {
+  std::vector<HopReport> out;
+  out.swap(reports_);
+  return out;
+}
+
+void HopperController::Sanitize() {
+  const Vector& lo = problem_.bounds.u_min;
+  const Vector& hi = problem_.bounds.u_max;
+  for (int i = 0; i < 4; ++i) {
+    if (!std::isfinite(u_(i))) u_(i) = 0.5 * (lo(i) + hi(i));
+    u_(i) = std::min(std::max(u_(i), lo(i)), hi(i));
+  }
+}
+
+void HopperController::WriteHeld(const mjModel* m, mjData* d) {
+  Sanitize();
+  WriteActuation(map_, m, d, vsa_.state(), u_.data());
+  // A non-finite state would make the spring terms non-finite: never hand MuJoCo a NaN.
+  for (int a : {map_.act_hip, map_.act_leg}) {
+    if (!std::isfinite(d->ctrl[a])) d->ctrl[a] = 0.0;
+  }
+}
+
+void HopperController::Compute(const mjModel* m, mjData* d) {
+  if (in_compute_) {  // nested call (e.g. a finite-difference mj_forward inside a step)
+    WriteHeld(m, d);
+    return;
+  }
+  in_compute_ = true;
+  try {
+    if (!failed_ && (!started_ || d->time > last_time_)) {
+      NewStep(m, d);
+    }
+    WriteHeld(m, d);
+  } catch (const std::exception& e) {
+    failed_ = true;
+    error_ = std::string("controller: ") + e.what();
+    WriteHeld(m, d);
+  } catch (...) {
+    failed_ = true;
+    error_ = "controller: unknown exception";
+    WriteHeld(m, d);
+  }
+  in_compute_ = false;
+}
+
+void HopperController::BeginHop(double t, const mjData* d) {
+  MapFlightState(map_, d, vsa_.state(), xf_.data());
+  recorder_.Clear();
+  recorder_.BeginMode(hopper::kFlight);
+  hop_start_ = t;
+  phase_start_ = t;
+  mode_ = hopper::kFlight;
+  x0_hop_ = xf_;
+  hop_x_start_ = xf_(hopper::kX);
+  apex_ = xf_(hopper::kY);
+  effort_ = 0.0;
+  hop_nonfinite_ = 0;
+}
+
+void HopperController::NewStep(const mjModel* m, mjData* d) {
+  const double t = d->time;
+  if (!started_) {
+    started_ = true;
+    last_time_ = t;
+    BeginHop(t, d);
+  } else {
+    // The stiffness commands of the previous step were held over [last_time_, t].
+    vsa_.Advance(t - last_time_, u_(2), u_(3));
+  }
+  const double step = t - last_time_;
+  last_time_ = t;
+
+  // Phase detection. Touchdown: the collision pass of this step (run before mjcb_control) has
+  // a foot-floor contact, so the current state is the last one before the impact. Takeoff:
+  // the floor's vertical force on the robot, solved in the previous step (qfrc_constraint is
+  // not recomputed until after this callback), has dropped below the threshold.
+  const bool may_switch = t - last_event_ >= config_.min_phase_time;
+  if (mode_ == hopper::kFlight && may_switch &&
+      FootTouches(map_, d, config_.touchdown_distance)) {
+    MapFlightState(map_, d, vsa_.state(), xf_.data());
+    recorder_.AddSample(t - hop_start_, xf_, u_);  // x^-(T1)
+    recorder_.EndMode();
+    recorder_.BeginMode(hopper::kStance);
+    x_td_ = xf_;
+    t_touchdown_ = t;
+    foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
+    foot_td_h_ = HopperModel::FootHeight(xf_);
+    mode_ = hopper::kStance;
+    phase_start_ = t;
+    last_event_ = t;
+    stance_first_ = true;
+  } else if (mode_ == hopper::kStance && may_switch &&
+             d->qfrc_constraint[map_.dof_z] < config_.takeoff_force) {
+    EndHop();
+    BeginHop(t, d);
+    last_event_ = t;
+  }
+
+  // The measured state in the model's coordinates of the current mode.
+  double* x = nullptr;
+  int n = 0;
+  if (mode_ == hopper::kFlight) {
+    MapFlightState(map_, d, vsa_.state(), xf_.data());
+    x = xf_.data();
+    n = hopper::kFlightDim;
+    apex_ = std::max(apex_, xf_(hopper::kY));
+  } else {
+    MapStanceState(map_, d, vsa_.state(), xs_.data());
+    x = xs_.data();
+    n = hopper::kStanceDim;
+  }
+  Eigen::Map<const Vector> xm(x, n);
+  if (!xm.allFinite()) {
+    ++nonfinite_steps_;
+    ++hop_nonfinite_;
+  }
+
+  // Online update (33)-(35): the policy clamps into the bounds and never returns NaN for a
+  // non-finite state; Sanitize() is the last guard.
+  policy_->Step(mode_, t - phase_start_, xm, u_);
+  Sanitize();
+  effort_ += cost_.InputCost(u_) * std::max(step, map_.timestep);
+
+  // Record the sample. The touchdown step already holds x^-(T1) as the flight mode's last
+  // sample; the first stance sample is the first post-impact measurement (the next step),
+  // stamped at the switching instant T1.
+  if (mode_ == hopper::kStance && stance_first_) {
+    if (t > t_touchdown_) {
+      recorder_.AddSample(t_touchdown_ - hop_start_, xm, u_);
+      stance_first_ = false;
+    }
+  } else if (xm.allFinite()) {
+    recorder_.AddSample(t - hop_start_, xm, u_);
+  }
+  if (mode_ == hopper::kStance) last_stance_ = xs_;
+}
+
+void HopperController::EndHop() {
+  // The stance mode ends with its last recorded sample, x^-(T2).
+  recorder_.EndMode();
+  recorder_.Finish(&trial_);
+  x_to_ = last_stance_;
+
+  HopReport r;
+  r.hop = hop_;
+  r.t_start = hop_start_;
+  r.t_touchdown = t_touchdown_;
+  r.t_end = hop_start_ + trial_.T(1);
+  r.t1 = trial_.T(0);
+  r.t2 = trial_.T(1);
+  cost_.SetReference(x0_hop_);
+  r.terms = cost_.Terms(x_td_, x_to_, effort_);
+  r.cost = r.terms.total();
+  r.apex = apex_;
+  r.foot_height_td = foot_td_h_;
+  r.step_length = have_prev_td_ ? foot_td_x_ - prev_foot_td_x_ : 0.0;
+  prev_foot_td_x_ = foot_td_x_;
+  have_prev_td_ = true;
+  // COM x at takeoff from the takeoff map of the measured stance state.
+  const double x_end = foot_td_x_ - x_to_(hopper::kSR) * std::sin(x_to_(hopper::kSTheta));
+  r.speed = r.t2 > 0 ? (x_end - hop_x_start_) / r.t2 : 0.0;
+  r.alpha = policy_->alpha();
+  r.du2 = policy_->du_squared_integral();
+  r.dt2 = policy_->dT().squaredNorm();
+  r.nonfinite = hop_nonfinite_;
+
+  // The offline part for the next hop.
+  if (config_.method == Method::kOcfb) {
+    r.accepted = true;
+    r.learner_cost = EvaluateCost(problem_, trial_).total;
+    policy_ = &model_learner_->ConvergedPolicy();
+  } else if (hop_ == 0) {
+    // Hop 0 ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
+    if (config_.method == Method::kMrl) {
+      Trajectory predicted;
+      model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(), &predicted);
+      cost_.SetReference(trial_.x0);
+      learner_->Initialize(trial_, &predicted);
+    } else {
+      learner_->Initialize(trial_);
+    }
+    r.accepted = true;
+    r.learner_cost = learner_->nominal_cost();
+    r.status = learner_->status();
+    policy_ = &learner_->NextTrial();
+  } else {
+    cost_.SetReference(trial_.x0);
+    const TrialResult tr = learner_->CompleteTrial(
+        trial_, config_.method == Method::kMrl ? &model_plant_ : nullptr);
+    r.accepted = tr.accepted;
+    r.learner_cost = tr.cost;
+    r.status = tr.status;
+    policy_ = &learner_->NextTrial();
+  }
+  policy_->BeginTrial();
+  reports_.push_back(r);
+  ++hop_;
+}
+
+void Attach(HopperController* controller) {
+  g_attached = controller;
+  mjcb_control = controller != nullptr ? ControlCallback : nullptr;
+}
+
+void Detach() { Attach(nullptr); }
+
+HopperController* Attached() { return g_attached; }
+
+}  // namespace ddoc::plugin

@@ -1,0 +1,192 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The controller plugin: Algorithm 1 (or OC-FB, or mRL) running hop by hop on the MJCF hopper,
+// inside MuJoCo's control callback.
+//
+// MuJoCo 2.2 has no engine-plugin API (that came with 2.3), so the controller attaches through
+// the global mjcb_control. It is shaped like a 2.3 plugin so that it can be registered as one
+// later: Create (fails clearly, never half an object), Reset, Compute.
+//
+// One hop is one trial (iteration) of Algorithm 1 (Section V-C): it starts at takeoff, runs the
+// flight mode until touchdown and the stance mode until the next takeoff. At every physics step
+// Compute reads the contact phase and the measured state from mjData, runs the online update
+// (33)-(34) and writes the actuator controls. At takeoff it hands the measured hop to the learner,
+// which runs the offline part for the next hop: sufficient decrease (36), the backward pass (30)
+// and the switching-time update (31).
+#ifndef DDOC_PLUGIN_HOPPER_CONTROLLER_H_
+#define DDOC_PLUGIN_HOPPER_CONTROLLER_H_
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "ddoc/hopper/hopper_cost.h"
+#include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/nominal_gait.h"
+#include "ddoc/hopper/vsa.h"
+#include "ddoc/learner.h"
+#include "ddoc/mujoco/hopper_mapping.h"
+#include "ddoc/plant.h"
+
+namespace ddoc::plugin {
+
+/// The three methods of Section V, all on the same engine (see README "One engine").
+enum class Method {
+  kAlg1,  ///< direction and line search from the measured hop
+  kOcfb,  ///< the converged model-based feedback policy, applied without learning
+  kMrl,   ///< direction from the model's prediction, line search on the measured cost
+};
+
+/// Configuration of the controller. Plain struct; every field has a default.
+struct ControllerConfig {
+  Method method = Method::kAlg1;
+  HopperParams model;                 ///< the (possibly inexact) analytic model
+  NominalGaitSettings gait;           ///< starting point of the model-based initial policy
+  LearnerSettings learner;            ///< Algorithm 1 on the robot
+  LearnerSettings model_learner;      ///< OC-FB solve on the model (initial policy)
+  double dt_model = 1e-3;             ///< RK4 step of the model plant, s
+  double flight_min = 0.05, flight_max = 1.5;  ///< duration bounds of the flight mode, s
+  double stance_min = 0.05, stance_max = 1.0;  ///< duration bounds of the stance mode, s
+  /// Touchdown: a foot-floor contact of the current collision pass with distance below this (m).
+  double touchdown_distance = 0.0;
+  /// Takeoff: the floor's vertical force on the robot (previous step) below this (N).
+  double takeoff_force = 0.5;
+  /// No phase change within this time after the previous one (s).
+  double min_phase_time = 0.03;
+  int max_samples_per_mode = 4000;    ///< preallocated samples per mode (1 ms steps)
+};
+
+/// What happened in one hop (one trial), measured on the robot.
+struct HopReport {
+  int hop = 0;                 ///< 0-based
+  double t_start = 0.0;        ///< takeoff time that started the hop, s
+  double t_touchdown = 0.0;    ///< s
+  double t_end = 0.0;          ///< takeoff time that ended the hop, s
+  HopperCostTerms terms;       ///< I1..I4 of (42), measured
+  double cost = 0.0;           ///< I1+I2+I3+I4
+  double learner_cost = 0.0;   ///< the engine's measured cost of the trial (EvaluateCost)
+  double t1 = 0.0, t2 = 0.0;   ///< flight duration and period, s
+  double step_length = 0.0;    ///< touchdown foot x minus the previous touchdown foot x, m
+  double speed = 0.0;          ///< (x_end - x_start) / t2, m/s
+  double apex = 0.0;           ///< max COM height during flight, m
+  double foot_height_td = 0.0; ///< foot height at touchdown (the I4 surface), m
+  double alpha = 0.0;          ///< line-search parameter the hop ran with
+  bool accepted = false;       ///< (36) held (hop 0: the initial trial, true)
+  double du2 = 0.0;            ///< int |du|^2 dtau
+  double dt2 = 0.0;            ///< |dT|^2 (planned vs nominal)
+  LearnerStatus status = LearnerStatus::kRunning;
+  int nonfinite = 0;           ///< steps with a non-finite measured state in this hop
+};
+
+/// The controller. Not thread-safe; one instance per mjData.
+class HopperController {
+ public:
+  /// Builds the mapping from the mjModel, validates the config, finds the nominal gait of the
+  /// model and solves the model-based optimal control problem from it (the OC-FB policy that
+  /// is the initial policy u^0, T^0 of every method). Returns null and sets *error on any
+  /// misconfiguration (bad MJCF names, bad bounds, a gait or solve that fails).
+  static std::unique_ptr<HopperController> Create(const mjModel* m, const ControllerConfig& config,
+                                                  std::string* error);
+
+  /// Puts the robot at the nominal gait's takeoff state (qpos, qvel, VSA states) at time 0 and
+  /// restarts the learning from the initial policy.
+  void Reset(const mjModel* m, mjData* d);
+
+  /// The per-step work; called by mjcb_control. Re-entry safe: a call at the same simulated
+  /// time as the previous one (mj_forward, finite differencing) or nested inside another call
+  /// only rewrites the held actuation for the current state and changes nothing else.
+  /// Never throws; never writes a non-finite or out-of-bounds input.
+  void Compute(const mjModel* m, mjData* d);
+
+  /// Reports of completed hops since the last call (moves them out).
+  std::vector<HopReport> TakeReports();
+
+  // Observers for logging (read after mj_step, outside the callback).
+  int mode() const { return mode_; }                       ///< hopper::kFlight / kStance
+  int hop() const { return hop_; }                         ///< index of the running hop
+  const double* last_input() const { return u_.data(); }   ///< 4: u applied at the last step
+  const VsaState& vsa() const { return vsa_.state(); }
+  const HopperMapping& mapping() const { return map_; }
+  const NominalGait& gait() const { return gait_; }
+  const Learner* learner() const { return learner_.get(); }
+  double model_cost() const { return model_cost_; }        ///< converged OC-FB cost on the model
+  int model_iterations() const { return model_iterations_; }
+  /// Set when the controller caught an internal error; the message says what failed. The
+  /// controller then holds the last safe input (clamped) until Reset.
+  bool failed() const { return failed_; }
+  const std::string& error() const { return error_; }
+  /// Total steps where the measured state was not finite.
+  long nonfinite_steps() const { return nonfinite_steps_; }
+  const ControllerConfig& config() const { return config_; }
+
+  /// Bounds of u (Table I).
+  const Vector& u_min() const { return problem_.bounds.u_min; }
+  const Vector& u_max() const { return problem_.bounds.u_max; }
+
+ private:
+  HopperController(const mjModel* m, const ControllerConfig& config);
+  void Initialize();                     // gait + OC-FB solve; throws
+  void NewStep(const mjModel* m, mjData* d);
+  void BeginHop(double t, const mjData* d);
+  void EndHop();                         // takeoff: offline part for the next hop
+  void WriteHeld(const mjModel* m, mjData* d);
+  void Sanitize();                       // u_ finite and inside the bounds
+
+  ControllerConfig config_;
+  HopperMapping map_;
+  HopperModel model_;
+  HopperCost cost_;
+  Problem problem_;
+  ModelPlant model_plant_;
+  NominalGait gait_;
+  std::unique_ptr<Learner> model_learner_;  // OC-FB on the model
+  std::unique_ptr<Learner> learner_;        // Algorithm 1 / mRL on the robot
+  OnlineController* policy_ = nullptr;      // the law of the running hop
+  double model_cost_ = 0.0;
+  int model_iterations_ = 0;
+
+  Vsa vsa_;
+  Eigen::Vector4d u_ = Eigen::Vector4d::Zero();  // input held over the current step
+  Eigen::Matrix<double, 14, 1> xf_;              // flight-state buffer
+  Eigen::Matrix<double, 10, 1> xs_;              // stance-state buffer
+
+  // Phase and hop bookkeeping.
+  int mode_ = hopper::kFlight;
+  int hop_ = 0;
+  bool started_ = false;        // first step after Reset seen
+  bool in_compute_ = false;     // re-entry guard
+  double last_time_ = 0.0;      // simulated time of the last new step
+  double phase_start_ = 0.0;    // absolute time the current mode started
+  double hop_start_ = 0.0;      // absolute time the hop started (trial t = 0)
+  double last_event_ = -1e9;    // absolute time of the last phase change
+  double hop_x_start_ = 0.0;    // COM x at the hop start
+  double apex_ = 0.0;           // max y in this hop's flight
+  double foot_td_x_ = 0.0, prev_foot_td_x_ = 0.0, foot_td_h_ = 0.0;
+  bool have_prev_td_ = false;
+  double t_touchdown_ = 0.0;
+  double effort_ = 0.0;         // int 1/2 u'Ru dt over the hop
+  Eigen::Matrix<double, 14, 1> x_td_, x0_hop_;   // pre-touchdown and hop-start flight states
+  Eigen::Matrix<double, 10, 1> x_to_;            // pre-takeoff stance state
+  Eigen::Matrix<double, 10, 1> last_stance_;     // stance state of the previous step
+  bool stance_first_ = false;                    // the first stance sample is pending
+  TrajectoryRecorder recorder_;
+  Trajectory trial_;
+  std::vector<HopReport> reports_;
+  bool failed_ = false;
+  std::string error_;
+  long nonfinite_steps_ = 0;
+  int hop_nonfinite_ = 0;
+};
+
+/// Attaches `controller` to MuJoCo's global mjcb_control (one controller per process; MuJoCo
+/// 2.2's callback is global). Attach(nullptr) or Detach() clears it.
+void Attach(HopperController* controller);
+void Detach();
+/// The attached controller, or null.
+HopperController* Attached();
+
+}  // namespace ddoc::plugin
+
+#endif  // DDOC_PLUGIN_HOPPER_CONTROLLER_H_

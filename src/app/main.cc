@@ -1,0 +1,409 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// ddoc-hopper: runs a hopper scenario headless. The true robot is the MJCF hopper stepped by
+// MuJoCo; the controller plugin (plugin/) runs Algorithm 1, OC-FB or mRL inside mjcb_control.
+//
+// Exit codes: 0 success, 1 internal error, 2 bad input, 3 the robot fell.
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "ddoc/mujoco/hopper_mapping.h"
+#include "ddoc/mujoco/hopper_sim.h"
+#include "hopper_controller.h"
+#include "run_log.h"
+#include "scenario.h"
+#ifdef DDOC_HAVE_RENDER
+#include "ddoc/render/frame_recorder.h"
+#include "ddoc/render/video.h"
+#endif
+
+namespace ddoc::app {
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitFall = 3;
+
+/// Fall limits (documented in the README): the run ends with exit code 3 when one holds.
+struct FallLimits {
+  double min_height = 0.3;     // COM height y below this, m (the leg is 0.7 m long)
+  double max_pitch = 1.0;      // |phi| above this, rad (57 deg)
+  double max_leg_angle = 1.2;  // |theta| above this, rad (69 deg): the leg is nearly horizontal
+  double max_phase = 3.0;      // a flight or stance phase longer than this, s (stalled)
+};
+
+plugin::Method ToPluginMethod(Method m) {
+  switch (m) {
+    case Method::kAlg1: return plugin::Method::kAlg1;
+    case Method::kOcfb: return plugin::Method::kOcfb;
+    case Method::kMrl: return plugin::Method::kMrl;
+  }
+  return plugin::Method::kAlg1;
+}
+
+HopperParams ModelParams(const Scenario& s) {
+  HopperParams p;
+  if (!s.model_mjcf.empty()) p = LoadHopperParamsFromMjcf(s.model_mjcf);
+  const ModelNumbers& n = s.model_numbers;
+  if (n.mass) p.M = *n.mass;
+  if (n.j_body) p.J_body = *n.j_body;
+  if (n.j_leg) p.J_leg = *n.j_leg;
+  if (n.r0) p.r0 = *n.r0;
+  if (n.drag) p.c_d = *n.drag;
+  if (n.beta) p.beta = *n.beta;
+  if (n.gravity) p.g = *n.gravity;
+  p.Validate();
+  return p;
+}
+
+double PushForce(const Scenario& s, double t) {
+  double f = 0.0;
+  for (const Push& p : s.pushes) {
+    if (t >= p.time && t < p.time + p.duration) f += p.force;
+  }
+  return f;
+}
+
+// Returns a non-empty reason when the robot has fallen.
+std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x, double phase_time) {
+  char buf[160];
+  if (!x.allFinite()) return "the measured state is not finite";
+  if (x(hopper::kY) < lim.min_height) {
+    std::snprintf(buf, sizeof(buf), "body height %.3f m below %.2f m", x(hopper::kY), lim.min_height);
+    return buf;
+  }
+  if (std::abs(x(hopper::kPhi)) > lim.max_pitch) {
+    std::snprintf(buf, sizeof(buf), "body pitch %.2f rad beyond +-%.2f rad", x(hopper::kPhi),
+                  lim.max_pitch);
+    return buf;
+  }
+  if (std::abs(x(hopper::kTheta)) > lim.max_leg_angle) {
+    std::snprintf(buf, sizeof(buf), "leg angle %.2f rad beyond +-%.2f rad", x(hopper::kTheta),
+                  lim.max_leg_angle);
+    return buf;
+  }
+  if (phase_time > lim.max_phase) {
+    std::snprintf(buf, sizeof(buf), "no touchdown or takeoff for %.1f s (stalled)", phase_time);
+    return buf;
+  }
+  return "";
+}
+
+int Run(int argc, char** argv) {
+  CLI::App cli{
+      "ddoc-hopper: data-driven iterative optimal control (Algorithm 1) of the MuJoCo hopper.\n"
+      "Exit codes: 0 success, 1 internal error, 2 bad input, 3 the robot fell."};
+  std::string scenario_path, out_dir, method, robot, model_mjcf, render_dir, video;
+  int hops = -1, width = 640, height = 480, log_every = 1;
+  double seconds = -1, fps = 60;
+  std::vector<std::string> pushes;
+  bool no_pushes = false, quiet = false;
+  cli.add_option("scenario", scenario_path, "scenario XML file (see models/scenarios/)")
+      ->required();
+  cli.add_option("--out,-o", out_dir, "output directory (default: out/<scenario name>)");
+  cli.add_option("--method,-m", method, "alg1 | ocfb | mrl (overrides the scenario)");
+  cli.add_option("--hops", hops, "number of hops (overrides the scenario)");
+  cli.add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
+  cli.add_option("--robot", robot, "robot MJCF (overrides the scenario)");
+  cli.add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
+  cli.add_option("--push", pushes, "extra push TIME,FORCE,DURATION (repeatable)");
+  cli.add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
+  cli.add_option("--log-every", log_every, "write every N-th physics step to trajectory.csv");
+  cli.add_option("--render", render_dir, "write PNG frames into this directory");
+  cli.add_option("--width", width, "frame width in pixels (default 640)");
+  cli.add_option("--height", height, "frame height in pixels (default 480)");
+  cli.add_option("--fps", fps, "frames per second of simulated time (default 60)");
+  cli.add_option("--video", video, "assemble the frames into this MP4 with ffmpeg");
+  cli.add_flag("--quiet,-q", quiet, "no progress display");
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = cli.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+
+  // Scenario and overrides: every bad input is reported before the simulation starts.
+  Scenario s;
+  try {
+    s = LoadScenario(scenario_path);
+    if (!method.empty()) s.method = ParseMethod(method);
+    if (hops >= 0) s.hops = hops;
+    if (seconds >= 0) s.seconds = seconds;
+    if (hops >= 0 && seconds < 0) s.seconds = 0;
+    if (seconds >= 0 && hops < 0) s.hops = 0;
+    if (!robot.empty()) s.robot_mjcf = robot;
+    if (!model_mjcf.empty()) s.model_mjcf = model_mjcf;
+    if (no_pushes) s.pushes.clear();
+    for (const std::string& p : pushes) s.pushes.push_back(ParsePush(p));
+    if (log_every < 1) throw ScenarioError("--log-every must be >= 1");
+    ValidateScenario(s);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+    return kExitBadInput;
+  }
+  if (out_dir.empty()) out_dir = "out/" + s.name;
+  if (!video.empty() && render_dir.empty()) render_dir = out_dir + "/frames";
+
+#ifdef DDOC_HAVE_RENDER
+  RenderSettings render;
+  render.dir = render_dir;
+  render.width = width;
+  render.height = height;
+  render.fps = fps;
+  if (!render_dir.empty()) {
+    std::string error;
+    if (!render.Validate(&error)) {
+      std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
+      return kExitBadInput;
+    }
+  }
+#else
+  if (!render_dir.empty()) {
+    std::fprintf(stderr, "ddoc-hopper: --render: this build has no OSMesa rendering\n");
+    return kExitBadInput;
+  }
+#endif
+
+  // The true robot.
+  MjModelPtr model;
+  HopperParams params;
+  try {
+    model = LoadMjcf(s.robot_mjcf);
+    HopperMapping::Build(model.get(), s.robot_mjcf);  // names checked, errors name the file
+    params = ModelParams(s);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+    return kExitBadInput;
+  }
+  MjDataPtr data(mj_makeData(model.get()));
+  mjModel* m = model.get();
+  mjData* d = data.get();
+
+  plugin::ControllerConfig config;
+  config.method = ToPluginMethod(s.method);
+  config.model = params;
+  config.gait.forward_speed = s.forward_speed;
+  std::string error;
+  const auto t_wall0 = std::chrono::steady_clock::now();
+  std::unique_ptr<plugin::HopperController> controller =
+      plugin::HopperController::Create(m, config, &error);
+  if (!controller) {
+    std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
+    return kExitError;
+  }
+  controller->Reset(m, d);
+  plugin::Attach(controller.get());
+  const HopperMapping& map = controller->mapping();
+
+  std::unique_ptr<RunLog> log;
+  try {
+    log = std::make_unique<RunLog>(out_dir, MethodName(s.method));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+    plugin::Detach();
+    return kExitBadInput;
+  }
+
+#ifdef DDOC_HAVE_RENDER
+  std::unique_ptr<FrameRecorder> frames;
+  if (!render_dir.empty()) {
+    frames = FrameRecorder::Create(m, render, &error);
+    if (!frames) {
+      std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
+      plugin::Detach();
+      return kExitBadInput;
+    }
+  }
+#endif
+
+  Summary summary;
+  summary.scenario = s.name;
+  summary.method = MethodName(s.method);
+  summary.robot = s.robot_mjcf;
+  summary.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
+  summary.pushes = s.pushes;
+  log->WriteSummary(summary);
+
+  const bool progress = !quiet && isatty(STDERR_FILENO);
+  const FallLimits limits;
+  int exit_code = kExitOk;
+  long step = 0;
+  double last_cost = std::nan(""), last_speed = std::nan("");
+  double speed_sum = 0, period_sum = 0;
+  int tail_count = 0;
+  double phase_start = 0.0;
+  int last_mode = controller->mode();
+  std::vector<bool> push_started(s.pushes.size(), false), push_ended(s.pushes.size(), false);
+
+  auto done = [&]() {
+    if (s.hops > 0 && summary.hops >= s.hops) return true;
+    if (s.seconds > 0 && d->time >= s.seconds) return true;
+    return false;
+  };
+
+  while (!done()) {
+    const double t = d->time;
+    const double push = PushForce(s, t);
+    ApplyDragAndPush(map, m, d, push);
+    mj_step(m, d);
+    ++step;
+
+    if (controller->failed()) {
+      std::fprintf(stderr, "\nddoc-hopper: %s\n", controller->error().c_str());
+      summary.fall_reason = controller->error();
+      exit_code = kExitError;
+      break;
+    }
+
+    const Eigen::Matrix<double, 14, 1> x = FlightState(map, d, controller->vsa());
+    if (controller->mode() != last_mode) {
+      last_mode = controller->mode();
+      phase_start = d->time;
+    }
+    if (step % log_every == 0) {
+      SampleRecord r;
+      r.t = d->time;
+      r.hop = controller->hop();
+      r.phase = controller->mode();
+      for (int i = 0; i < 14; ++i) r.q[i] = x(i);
+      for (int i = 0; i < 4; ++i) r.u[i] = controller->last_input()[i];
+      r.push = push;
+      log->WriteSample(r);
+    }
+    for (size_t i = 0; i < s.pushes.size(); ++i) {
+      const Push& p = s.pushes[i];
+      EventRecord e{d->time, controller->hop(), "", x(hopper::kX), x(hopper::kY),
+                    x(hopper::kXd), x(hopper::kYd)};
+      if (!push_started[i] && d->time >= p.time) {
+        push_started[i] = true;
+        e.type = "push_start";
+        log->WriteEvent(e);
+      }
+      if (!push_ended[i] && d->time >= p.time + p.duration) {
+        push_ended[i] = true;
+        e.type = "push_end";
+        log->WriteEvent(e);
+      }
+    }
+
+    for (const plugin::HopReport& h : controller->TakeReports()) {
+      log->WriteEvent({h.t_touchdown, h.hop, "touchdown", 0, 0, 0, 0});
+      log->WriteEvent({h.t_end, h.hop, "takeoff", 0, 0, 0, 0});
+      HopRecord r;
+      r.hop = h.hop;
+      r.t_start = h.t_start;
+      r.t_end = h.t_end;
+      r.cost = h.cost;
+      r.i1 = h.terms.i1;
+      r.i2 = h.terms.i2;
+      r.i3 = h.terms.i3;
+      r.i4 = h.terms.i4;
+      r.t1 = h.t1;
+      r.t2 = h.t2;
+      r.step_length = h.step_length;
+      r.speed = h.speed;
+      r.apex = h.apex;
+      r.alpha = h.alpha;
+      r.accepted = h.accepted;
+      r.du2 = h.du2;
+      r.dt2 = h.dt2;
+      log->WriteHop(r);
+      summary.hops = h.hop + 1;
+      summary.final_cost = h.cost;
+      summary.final_i4 = h.terms.i4;
+      (h.accepted ? summary.accepted : summary.rejected) += 1;
+      if (summary.converged_hop < 0 && h.status == LearnerStatus::kConverged) {
+        summary.converged_hop = h.hop;
+      }
+      speed_sum += h.speed;
+      period_sum += h.t2;
+      ++tail_count;
+      summary.mean_speed = speed_sum / tail_count;
+      summary.mean_period = period_sum / tail_count;
+      summary.sim_time_s = d->time;
+      summary.wall_time_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall0).count();
+      log->WriteSummary(summary);
+      last_cost = h.cost;
+      last_speed = h.speed;
+      if (progress) {
+        std::fprintf(stderr, "\rhop %4d  cost %10.4g  speed %6.3f m/s  period %5.3f s  %s   ",
+                     h.hop, h.cost, h.speed, h.t2, h.accepted ? "accepted" : "rejected");
+        std::fflush(stderr);
+      }
+    }
+
+#ifdef DDOC_HAVE_RENDER
+    if (frames) {
+      Overlay o;
+      o.method = summary.method;
+      o.hop = controller->hop();
+      o.last_cost = last_cost;
+      o.forward_speed = last_speed;
+      frames->MaybeCapture(m, d, o);
+    }
+#endif
+
+    const std::string fall = FallReason(limits, x, d->time - phase_start);
+    if (!fall.empty()) {
+      log->WriteEvent({d->time, controller->hop(), "fall", x(hopper::kX), x(hopper::kY),
+                       x(hopper::kXd), x(hopper::kYd)});
+      summary.fell = true;
+      summary.fall_reason = fall;
+      if (progress) std::fputc('\n', stderr);
+      std::fprintf(stderr, "ddoc-hopper: the robot fell in hop %d at t = %.3f s: %s\n",
+                   controller->hop(), d->time, fall.c_str());
+      exit_code = kExitFall;
+      break;
+    }
+  }
+  plugin::Detach();
+  if (progress) std::fputc('\n', stderr);
+
+  summary.sim_time_s = d->time;
+  summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall0).count();
+  log->WriteSummary(summary);
+  log->Flush();
+
+#ifdef DDOC_HAVE_RENDER
+  if (frames) {
+    if (!frames->Finish(&error)) {
+      std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
+      return kExitError;
+    }
+    if (!video.empty()) {
+      std::string message;
+      if (!AssembleVideo(render_dir, fps, video, &message)) {
+        std::fprintf(stderr, "ddoc-hopper: --video: %s\n", message.c_str());
+        if (exit_code == kExitOk) exit_code = kExitError;
+      }
+    }
+  }
+#endif
+  std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s, final cost %.4g, wrote %s\n",
+               s.name.c_str(), summary.method.c_str(), summary.hops,
+               summary.fell ? "FELL" : "no fall", summary.final_cost, out_dir.c_str());
+  return exit_code;
+}
+
+}  // namespace
+}  // namespace ddoc::app
+
+int main(int argc, char** argv) {
+  try {
+    return ddoc::app::Run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ddoc-hopper: internal error: %s\n", e.what());
+    return 1;
+  }
+}
