@@ -1,0 +1,138 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/hopper/hopper_cost.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "fd.h"
+
+namespace ddoc {
+namespace {
+
+using testing::FdJacobian;
+using testing::RelErr;
+
+Eigen::VectorXd Random(int n, std::mt19937* rng, double scale) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) v(i) = scale * u(*rng);
+  return v;
+}
+
+TEST(HopperCostTest, WeightsFollowOurReadingOfFig2) {
+  const HopperCostWeights w;
+  Eigen::Matrix<double, 14, 1> q = Eigen::Matrix<double, 14, 1>::Zero();
+  q(hopper::kTheta) = 600;
+  q(hopper::kPhi) = 1000;
+  q(hopper::kXd) = 1000;
+  q(hopper::kYd) = 10;
+  q(hopper::kThetad) = 1;
+  q(hopper::kPhid) = 1;
+  EXPECT_EQ(w.q_diag, q);
+  EXPECT_EQ(w.r_diag, Eigen::Vector4d(1e-2, 1e-4, 1e-6, 1e-6));
+  EXPECT_EQ(w.surface_weight, 1e-3);
+  EXPECT_EQ(kHopperSurfaceWeight, 1e-3);
+}
+
+TEST(HopperCostTest, DerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(5);
+  for (const ImpactModel im : {ImpactModel::kMasslessLeg, ImpactModel::kPaperLiteral}) {
+    HopperParams p;
+    p.impact = im;
+    const HopperModel model(p);
+    HopperCost cost(model);
+    Eigen::VectorXd ref = Random(14, &rng, 1.0);
+    ref(hopper::kR) = 0.7;
+    cost.SetReference(ref);
+    for (int trial = 0; trial < 5; ++trial) {
+      for (int k = 0; k < 2; ++k) {
+        const int n = model.state_dim(k);
+        Eigen::VectorXd x = Random(n, &rng, 1.0);
+        x(k == 0 ? hopper::kR : hopper::kSR) = 0.7 + 0.05 * x(0);
+        const Eigen::VectorXd u = Random(4, &rng, 3.0) + Eigen::Vector4d(0, 0, 80, 2000);
+        // Running cost.
+        Eigen::VectorXd lx(n), lu(4);
+        Eigen::MatrixXd lxx(n, n), luu(4, 4), lux(4, n);
+        cost.RunningDerivatives(k, x, u, lx, lu, lxx, luu, lux);
+        auto l_of_u = [&](const Eigen::VectorXd& uu) {
+          return Eigen::VectorXd::Constant(1, cost.Running(k, x, uu));
+        };
+        auto l_of_x = [&](const Eigen::VectorXd& xx) {
+          return Eigen::VectorXd::Constant(1, cost.Running(k, xx, u));
+        };
+        auto lu_of_u = [&](const Eigen::VectorXd& uu) {
+          Eigen::VectorXd a(n), b(4);
+          Eigen::MatrixXd c(n, n), d(4, 4), e(4, n);
+          cost.RunningDerivatives(k, x, uu, a, b, c, d, e);
+          return b;
+        };
+        EXPECT_LT(RelErr(lu.transpose(), FdJacobian(l_of_u, u)), 1e-7);
+        EXPECT_LT(RelErr(lx.transpose(), FdJacobian(l_of_x, x)), 1e-7);
+        EXPECT_LT(RelErr(luu, FdJacobian(lu_of_u, u)), 1e-7);
+        EXPECT_EQ(lxx.norm(), 0.0);
+        EXPECT_EQ(lux.norm(), 0.0);
+        // Switching cost: gradient from values, Hessian from gradients.
+        Eigen::VectorXd phix(n);
+        Eigen::MatrixXd phixx(n, n);
+        cost.SwitchingDerivatives(k, x, phix, phixx);
+        auto phi = [&](const Eigen::VectorXd& xx) {
+          return Eigen::VectorXd::Constant(1, cost.Switching(k, xx));
+        };
+        auto grad = [&](const Eigen::VectorXd& xx) {
+          Eigen::VectorXd g(n);
+          Eigen::MatrixXd h(n, n);
+          cost.SwitchingDerivatives(k, xx, g, h);
+          return g;
+        };
+        EXPECT_LT(RelErr(phix.transpose(), FdJacobian(phi, x)), 1e-6) << "k " << k;
+        EXPECT_LT(RelErr(phixx, FdJacobian(grad, x)), 1e-6) << "k " << k;
+        EXPECT_LT((phixx - phixx.transpose()).norm(), 1e-9);
+      }
+    }
+  }
+}
+
+TEST(HopperCostTest, TermsAreTheFourPiecesOf42) {
+  const HopperModel model{HopperParams()};
+  HopperCost cost(model);
+  Eigen::Matrix<double, 14, 1> x0 = Eigen::Matrix<double, 14, 1>::Zero();
+  x0 << 0, 0.7, 0, 0, 0.7, 50, 2000, 0.3, 1.2, 0, 0, 0, 0, 0;
+  cost.SetReference(x0);
+  // A stance state whose takeoff is x0 except for theta (+0.01) gives I1 = 600 * 1e-4 plus the
+  // change it induces in xd, yd through the takeoff map.
+  Eigen::Matrix<double, 10, 1> xs = Eigen::Matrix<double, 10, 1>::Zero();
+  xs << 0.01, 0, 0.7, 50, 2000, 0, 0, 1.2, 0, 0;
+  Eigen::VectorXd xf(14);
+  model.TakeoffMap(xs, 0.0, xf);
+  double expect_i1 = 0.0;
+  const HopperCostWeights w;
+  for (int i = 0; i < 14; ++i) expect_i1 += w.q_diag(i) * std::pow(xf(i) - x0(i), 2);
+  Eigen::Matrix<double, 14, 1> xtd = x0;
+  xtd(hopper::kY) = 0.7 + 0.02;  // foot 2 cm above the ground at the planned touchdown
+  xtd(hopper::kYd) = -1.2;
+  xtd(hopper::kTheta) = 0.1;
+  const HopperCostTerms t = cost.Terms(xtd, xs, 0.123);
+  EXPECT_NEAR(t.i1, expect_i1, 1e-12);
+  EXPECT_GT(t.i1, 0.06);
+  EXPECT_EQ(t.i2, 0.123);
+  EXPECT_NEAR(t.i3, model.ImpactEnergyLoss(xtd), 1e-15);
+  EXPECT_NEAR(t.i4, 1e-3 * std::pow(0.72 - 0.7 * std::cos(0.1), 2), 1e-15);
+  EXPECT_NEAR(t.total(), t.i1 + t.i2 + t.i3 + t.i4, 1e-15);
+  EXPECT_NEAR(cost.InputCost(Eigen::Vector4d(1, 2, 3, 4)),
+              0.5 * (1e-2 + 1e-4 * 4 + 1e-6 * 9 + 1e-6 * 16), 1e-15);
+}
+
+TEST(HopperCostTest, BadInputIsRejected) {
+  const HopperModel model{HopperParams()};
+  HopperCost cost(model);
+  EXPECT_THROW(cost.SetReference(Eigen::VectorXd::Zero(10)), InvalidArgument);
+  HopperCostWeights w;
+  w.r_diag(2) = 0.0;
+  EXPECT_THROW(HopperCost(model, w), InvalidArgument);
+  EXPECT_THROW(cost.Terms(Eigen::VectorXd::Zero(10), Eigen::VectorXd::Zero(10), 0.0),
+               InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ddoc

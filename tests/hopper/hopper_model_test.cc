@@ -1,0 +1,256 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/hopper/hopper_model.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/hopper/hop_simulator.h"
+#include "fd.h"
+
+namespace ddoc {
+namespace {
+
+using testing::FdJacobian;
+using testing::RelErr;
+using V14 = Eigen::Matrix<double, 14, 1>;
+using V10 = Eigen::Matrix<double, 10, 1>;
+
+// A random but physically sensible flight / stance state and input (fixed seed).
+V14 RandomFlight(std::mt19937* rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  V14 x;
+  x << 0.3 * u(*rng), 0.8 + 0.1 * u(*rng), 0.3 * u(*rng), 0.2 * u(*rng), 0.7 + 0.02 * u(*rng),
+      80 + 50 * u(*rng), 2000 + 200 * u(*rng), u(*rng), u(*rng), u(*rng), u(*rng), 0.5 * u(*rng),
+      10 * u(*rng), 100 * u(*rng);
+  return x;
+}
+V10 RandomStance(std::mt19937* rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  V10 x;
+  x << 0.3 * u(*rng), 0.2 * u(*rng), 0.65 + 0.04 * u(*rng), 80 + 50 * u(*rng),
+      2000 + 200 * u(*rng), u(*rng), u(*rng), u(*rng), 10 * u(*rng), 100 * u(*rng);
+  return x;
+}
+Eigen::Vector4d RandomInput(std::mt19937* rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Eigen::Vector4d lo = hopper::InputLowerBound(), hi = hopper::InputUpperBound();
+  Eigen::Vector4d v;
+  for (int i = 0; i < 4; ++i) v(i) = lo(i) + (hi(i) - lo(i)) * u(*rng);
+  return v;
+}
+
+HopperParams DragParams() {
+  HopperParams p;
+  p.M = 12.0;
+  p.c_d = 0.01;
+  return p;
+}
+
+TEST(HopperModelTest, DimensionsAndSurfaces) {
+  HopperModel model{HopperParams()};
+  EXPECT_EQ(model.num_modes(), 2);
+  EXPECT_EQ(model.state_dim(0), 14);
+  EXPECT_EQ(model.state_dim(1), 10);
+  EXPECT_EQ(model.input_dim(), 4);
+  EXPECT_EQ(model.surface_dim(0), 1);
+  EXPECT_EQ(model.surface_dim(1), 0);
+  EXPECT_TRUE(model.has_cycle_reset());
+}
+
+TEST(HopperModelTest, FlowDerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(7);
+  for (const ImpactModel im : {ImpactModel::kMasslessLeg, ImpactModel::kPaperLiteral}) {
+    HopperParams p = DragParams();
+    p.impact = im;
+    HopperModel model(p);
+    for (int trial = 0; trial < 5; ++trial) {
+      for (int k = 0; k < 2; ++k) {
+        const int n = model.state_dim(k);
+        const Eigen::VectorXd x = k == 0 ? Eigen::VectorXd(RandomFlight(&rng))
+                                         : Eigen::VectorXd(RandomStance(&rng));
+        const Eigen::VectorXd u = RandomInput(&rng);
+        Eigen::MatrixXd fx(n, n), fu(n, 4);
+        model.FlowDerivatives(k, x, u, fx, fu);
+        auto fxu = [&](const Eigen::VectorXd& xx) {
+          Eigen::VectorXd out(n);
+          model.Flow(k, xx, u, out);
+          return out;
+        };
+        auto fuu = [&](const Eigen::VectorXd& uu) {
+          Eigen::VectorXd out(n);
+          model.Flow(k, x, uu, out);
+          return out;
+        };
+        EXPECT_LT(RelErr(fx, FdJacobian(fxu, x)), 1e-6) << "mode " << k;
+        EXPECT_LT(RelErr(fu, FdJacobian(fuu, u)), 1e-6) << "mode " << k;
+      }
+    }
+  }
+}
+
+TEST(HopperModelTest, ResetAndSurfaceDerivativesMatchFiniteDifferences) {
+  std::mt19937 rng(11);
+  for (const ImpactModel im : {ImpactModel::kMasslessLeg, ImpactModel::kPaperLiteral}) {
+    HopperParams p;
+    p.impact = im;
+    HopperModel model(p);
+    for (int trial = 0; trial < 5; ++trial) {
+      const Eigen::VectorXd xf = RandomFlight(&rng);
+      const Eigen::VectorXd xs = RandomStance(&rng);
+      Eigen::MatrixXd g0(10, 14), g1(14, 10), h0(1, 14);
+      model.ResetDerivative(0, xf, g0);
+      model.ResetDerivative(1, xs, g1);
+      model.SurfaceDerivative(0, xf, h0);
+      auto r0 = [&](const Eigen::VectorXd& x) {
+        Eigen::VectorXd o(10);
+        model.Reset(0, x, o);
+        return o;
+      };
+      auto r1 = [&](const Eigen::VectorXd& x) {
+        Eigen::VectorXd o(14);
+        model.Reset(1, x, o);
+        return o;
+      };
+      auto s0 = [&](const Eigen::VectorXd& x) {
+        Eigen::VectorXd o(1);
+        model.Surface(0, x, o);
+        return o;
+      };
+      EXPECT_LT(RelErr(g0, FdJacobian(r0, xf)), 1e-7);
+      EXPECT_LT(RelErr(g1, FdJacobian(r1, xs)), 1e-7);
+      EXPECT_LT(RelErr(h0, FdJacobian(s0, xf)), 1e-7);
+    }
+  }
+}
+
+// Mechanical energy of the flight state with constant stiffnesses (kd = 0) and input u: the
+// Lagrangian of DESIGN.md plus the VSA spring potentials
+//   V = -tau0 (phi - theta) + 1/2 k_hip (phi - theta)^2 - F0 r + 1/2 k_leg (r - r0)^2.
+double FlightEnergy(const HopperParams& p, const V14& x, const Eigen::Vector4d& u) {
+  const double q = x(3) - x(2);
+  return 0.5 * p.M * (x(7) * x(7) + x(8) * x(8)) + 0.5 * p.J_leg * x(9) * x(9) +
+         0.5 * p.J_body * x(10) * x(10) + p.M * p.g * x(1) - u(0) * q + 0.5 * x(5) * q * q -
+         u(1) * x(4) + 0.5 * x(6) * (x(4) - p.r0) * (x(4) - p.r0);
+}
+
+TEST(HopperModelTest, StanceAndFlightConserveEnergyWithConstantStiffness) {
+  // An independent check of (38)/(39) and of the sign of the hip torque: with k = k0 at rest and
+  // no drag the only source of energy change is the integrator.
+  HopperParams p;
+  HopperModel model(p);
+  const Eigen::Vector4d u(1.5, 2.0, 90.0, 2100.0);
+  V10 xs;
+  xs << 0.15, -0.1, 0.66, 90.0, 2100.0, -0.8, 0.4, -0.9, 0.0, 0.0;
+  auto flight_of = [&](const V10& s) {
+    Eigen::VectorXd f(14);
+    model.TakeoffMap(s, 0.0, f);
+    V14 out = f;
+    out(hopper::kRd) = s(hopper::kSRd);  // keep the leg's radial velocity for the energy
+    return out;
+  };
+  const auto traj = IntegrateMode(model, 1, xs, u, 0.2, 1e-4);
+  const double e0 = FlightEnergy(p, flight_of(xs), u);
+  double drift = 0.0;
+  for (const auto& s : traj) {
+    drift = std::max(drift, std::abs(FlightEnergy(p, flight_of(V10(s.x)), u) - e0));
+  }
+  EXPECT_LT(drift, 1e-8 * std::abs(e0) + 1e-9);
+  // Stance must actually exchange energy between terms (not trivially constant).
+  EXPECT_GT(std::abs(traj.back().x(hopper::kSR) - xs(hopper::kSR)), 1e-3);
+
+  V14 xf;
+  xf << 0.0, 1.0, 0.1, -0.2, 0.7, 90.0, 2100.0, 0.5, 1.0, 0.7, -0.3, 0.0, 0.0, 0.0;
+  const auto tf = IntegrateMode(model, 0, xf, u, 0.3, 1e-4);
+  const double ef0 = FlightEnergy(p, xf, u);
+  double fdrift = 0.0;
+  for (const auto& s : tf) fdrift = std::max(fdrift, std::abs(FlightEnergy(p, V14(s.x), u) - ef0));
+  EXPECT_LT(fdrift, 1e-8 * std::abs(ef0));
+}
+
+TEST(HopperModelTest, TouchdownResetLosesExactlyTheEnergyOf41) {
+  // The massless-leg reset conserves angular momentum about the foot; the kinetic energy it
+  // removes must equal Delta E of (41) with J_leg, and the foot must be at rest afterwards.
+  std::mt19937 rng(3);
+  HopperParams p;
+  HopperModel model(p);
+  for (int trial = 0; trial < 10; ++trial) {
+    V14 x = RandomFlight(&rng);
+    Eigen::VectorXd xs(10);
+    model.Reset(0, x, xs);
+    Eigen::VectorXd xa(14);
+    model.TakeoffMap(xs, HopperModel::FootX(x), xa);  // post-impact hip velocity, foot at rest
+    const double ke_before = 0.5 * p.M * (x(7) * x(7) + x(8) * x(8)) + 0.5 * p.J_leg * x(9) * x(9);
+    const double ke_after =
+        0.5 * p.M * (xa(7) * xa(7) + xa(8) * xa(8)) + 0.5 * p.J_leg * xa(9) * xa(9);
+    // The radial velocity is continuous (impulse normal to the leg), so the loss is all normal.
+    const double radial_before = -x(7) * std::sin(x(2)) + x(8) * std::cos(x(2));
+    EXPECT_NEAR(xs(hopper::kSRd), radial_before, 1e-12);
+    EXPECT_NEAR(ke_before - ke_after, model.ImpactEnergyLoss(x), 1e-9);
+    EXPECT_NEAR(model.ImpactRatio(x(4)), p.J_leg / (p.J_leg + p.M * x(4) * x(4)), 1e-15);
+  }
+  // Default parameters: J_leg / (J_leg + M r0^2) = 0.0485, the paper's J_body version 0.338.
+  EXPECT_NEAR(model.ImpactRatio(0.7), 0.25 / (0.25 + 10 * 0.49), 1e-12);
+  HopperParams lit = p;
+  lit.impact = ImpactModel::kPaperLiteral;
+  EXPECT_NEAR(HopperModel(lit).ImpactRatio(0.7), 2.5 / (2.5 + 4.9), 1e-12);
+}
+
+TEST(HopperModelTest, GuardsAndFootKinematics) {
+  HopperModel model{HopperParams()};
+  V14 x = V14::Zero();
+  x(hopper::kY) = 0.8;
+  x(hopper::kTheta) = 0.2;
+  x(hopper::kR) = 0.7;
+  const Eigen::Vector4d u(0.0, 3.0, 50.0, 2000.0);
+  EXPECT_NEAR(model.Guard(0, x, u), 0.8 - 0.7 * std::cos(0.2), 1e-15);
+  EXPECT_NEAR(HopperModel::FootX(x), 0.7 * std::sin(0.2), 1e-15);
+  V10 xs = V10::Zero();
+  xs(hopper::kSR) = 0.69;
+  xs(hopper::kSKleg) = 2000.0;
+  EXPECT_NEAR(model.Guard(1, xs, u), 3.0 - 2000.0 * (0.69 - 0.7), 1e-12);
+  EXPECT_THROW(model.Guard(1, x, u), InvalidArgument);
+}
+
+TEST(HopperModelTest, InvalidParametersNameTheField) {
+  HopperParams p;
+  p.J_leg = 0.0;
+  try {
+    HopperModel m(p);
+    FAIL() << "expected InvalidArgument";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("J_leg"), std::string::npos) << e.what();
+  }
+  p = HopperParams();
+  p.M = -1.0;
+  EXPECT_THROW(HopperModel{p}, InvalidArgument);
+  p = HopperParams();
+  p.c_d = -0.1;
+  EXPECT_THROW(HopperModel{p}, InvalidArgument);
+  p = HopperParams();
+  p.beta = std::nan("");
+  EXPECT_THROW(HopperModel{p}, InvalidArgument);
+}
+
+TEST(HopSimulatorTest, VerticalHopMatchesTheClosedForm) {
+  // Theta = 0, F0 = 0, constant k: flight is ballistic and stance a linear spring under gravity,
+  // r(t) = r_eq + A sin(...). Stance time = (pi + 2 asin(Mg/(k A))) / omega.
+  HopperParams p;
+  HopperModel model(p);
+  const double k = 2000.0, yd0 = 1.4;
+  V14 x0 = V14::Zero();
+  x0 << 0, 0.7, 0, 0, 0.7, 50, k, 0, yd0, 0, 0, 0, 0, 0;
+  const HopResult r = SimulateHop(model, x0, Eigen::Vector4d(0, 0, 50, k));
+  ASSERT_TRUE(r.ok) << r.message;
+  const double w = std::sqrt(k / p.M);
+  const double a = std::sqrt(std::pow(p.M * p.g / k, 2) + std::pow(yd0 / w, 2));
+  const double stance = (M_PI + 2.0 * std::asin(p.M * p.g / (k * a))) / w;
+  EXPECT_NEAR(r.t1, 2.0 * yd0 / p.g, 1e-9);
+  EXPECT_NEAR(r.t2 - r.t1, stance, 1e-7);
+  EXPECT_NEAR(r.apex, 0.7 + yd0 * yd0 / (2 * p.g), 1e-3);  // sampled apex
+  EXPECT_NEAR(r.x_to_plus(hopper::kYd), yd0, 1e-7);
+}
+
+}  // namespace
+}  // namespace ddoc

@@ -1,0 +1,62 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/hopper/nominal_gait.h"
+
+#include <gtest/gtest.h>
+
+namespace ddoc {
+namespace {
+
+// DESIGN.md's expected gait scale (own simulation of the stance model, M = 10 kg, k = 2000 N/m).
+void ExpectInDesignRange(const NominalGait& g) {
+  EXPECT_GE(g.stance_time, 0.25);
+  EXPECT_LE(g.stance_time, 0.33);
+  EXPECT_GE(g.period, 0.45);
+  EXPECT_LE(g.period, 0.70);
+  EXPECT_GE(g.apex, 0.75);
+  EXPECT_LE(g.apex, 0.90);
+  EXPECT_GE(g.forward_speed, 0.0);
+  EXPECT_LE(g.forward_speed, 1.5);
+}
+
+TEST(NominalGaitTest, ForwardGaitIsPeriodicAndInRange) {
+  NominalGaitSettings s;
+  s.forward_speed = 0.5;
+  const NominalGait g = FindNominalGait(HopperParams(), s);
+  ASSERT_TRUE(g.hop.ok);
+  EXPECT_LT(g.periodicity, 1e-10);
+  EXPECT_LT(g.max_abs_residual, 1e-6);
+  ExpectInDesignRange(g);
+  EXPECT_NEAR(g.forward_speed, 0.5, 1e-12);
+  EXPECT_GT(g.step_length, 0.1);
+  // The hop starts on the ground with the leg at rest length, inside the input bounds.
+  EXPECT_NEAR(HopperModel::FootHeight(g.x0), 0.0, 1e-12);
+  EXPECT_TRUE((g.u0.array() >= hopper::InputLowerBound().array()).all());
+  EXPECT_TRUE((g.u0.array() <= hopper::InputUpperBound().array()).all());
+  EXPECT_NEAR(g.T0(1), g.period, 1e-12);
+}
+
+TEST(NominalGaitTest, HeavyRobotStillHops) {
+  HopperParams p;
+  p.M = 12.0;
+  p.c_d = 0.01;
+  NominalGaitSettings s;
+  s.forward_speed = 0.3;
+  s.k0_leg = 2350.0;
+  const NominalGait g = FindNominalGait(p, s);
+  ASSERT_TRUE(g.hop.ok);
+  // With drag a constant input cannot be exactly periodic; the residual is small but nonzero.
+  EXPECT_LT(g.max_abs_residual, 0.05);
+  EXPECT_GT(g.stance_time, 0.2);
+}
+
+TEST(NominalGaitTest, RejectsBadSettings) {
+  NominalGaitSettings s;
+  s.k0_leg = 100.0;
+  EXPECT_THROW(FindNominalGait(HopperParams(), s), InvalidArgument);
+  s = NominalGaitSettings();
+  s.apex_height = 0.5;
+  EXPECT_THROW(FindNominalGait(HopperParams(), s), InvalidArgument);
+}
+
+}  // namespace
+}  // namespace ddoc
