@@ -144,7 +144,12 @@ std::unique_ptr<OffscreenRenderer> OffscreenRenderer::Create(const mjModel* m,
     ScopedErrorThrow throw_on_error;
     mjv_makeScene(m, &r->scene_, m->ngeom + kExtraSceneGeoms);
     r->scene_made_ = true;
-    mjr_makeContext(&sized, &r->context_, mjFONTSCALE_150);
+    // Font: 100 % up to 600 pixels of height (the overlay table then covers ~1/4 of a
+    // 640x480 frame), 150 % up to 1000, 200 % beyond.
+    const int font_scale = settings.height <= 600    ? mjFONTSCALE_100
+                           : settings.height <= 1000 ? mjFONTSCALE_150
+                                                     : mjFONTSCALE_200;
+    mjr_makeContext(&sized, &r->context_, font_scale);
     r->context_made_ = true;
     mjr_setBuffer(mjFB_OFFSCREEN, &r->context_);
   } catch (const std::exception& e) {

@@ -221,7 +221,7 @@ TEST_F(OffscreenRendererTest, OverlayTextIsDrawnTopLeft) {
     for (int x = 0; x < kWidth; ++x) {
       const bool differs =
           std::memcmp(Pixel(plain, kWidth, x, y), Pixel(text, kWidth, x, y), 3) != 0;
-      // The label/value table at mjFONTSCALE_150 is ~210 x 72 pixels.
+      // The label/value table at mjFONTSCALE_100 is ~150 x 50 pixels here.
       (x < 0.7 * kWidth && y < 0.35 * kHeight ? top_left : elsewhere) += differs;
       if (differs) {
         max_x = std::max(max_x, x);

@@ -33,8 +33,9 @@ struct RenderSettings {
   double lookat_x = 0;
   /// Look-at y in m (the hopper moves in the x-z plane, so y stays fixed).
   double lookat_y = 0;
-  /// Look-at height z in m (fixed: the camera does not bob with the hops).
-  double lookat_z = 0.5;
+  /// Look-at height z in m (fixed: the camera does not bob with the hops). With the
+  /// default distance and elevation the view spans about z in [-0.6, 1.9] m at the body.
+  double lookat_z = 0.6;
   /// Camera distance from the look-at point in m, > 0.
   double camera_distance = 3.0;
   /// Camera azimuth in degrees; 90 looks along +y, so world +x points right in the image.
