@@ -71,7 +71,9 @@ class OnlineController : public Policy {
   const Vector& dT() const { return dT_; }                    ///< K
   const Vector& planned_T() const { return planned_T_; }      ///< K: T^{i+1}
   const Vector& nominal_T() const { return nominal_T_; }      ///< K: T^i
-  /// int |du|^2 dtau accumulated over this trial's Step calls (left Riemann sum in tau).
+  /// int |du|^2 dtau accumulated over this trial's Step calls (left Riemann sum in tau; the
+  /// interval after the last Step of a mode is not included). The Learner's (36) uses the
+  /// measured inputs instead.
   double du_squared_integral() const { return du_integral_; }
   /// Steps with a non-finite state or time since BeginTrial.
   int nonfinite_count() const { return nonfinite_count_; }

@@ -77,8 +77,16 @@ class QuadraticCost : public SwitchedCost {
   std::vector<Vector> r_;
 
  protected:
+  // Allocation-free quadratic forms (the engine's no-allocation tests use this cost).
+  static double Quad(const Matrix& M, const ConstVectorRef& a) {
+    double v = 0;
+    for (int j = 0; j < a.size(); ++j) {
+      for (int i = 0; i < a.size(); ++i) v += a(i) * M(i, j) * a(j);
+    }
+    return v;
+  }
   double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
-    return 0.5 * x.dot(Q_[k] * x) + 0.5 * u.dot(R_[k] * u) + rho_[k];
+    return 0.5 * Quad(Q_[k], x) + 0.5 * Quad(R_[k], u) + rho_[k];
   }
   void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
                             VectorRef lu, MatrixRef lxx, MatrixRef luu,
@@ -90,12 +98,16 @@ class QuadraticCost : public SwitchedCost {
     lux.setZero();
   }
   double DoSwitching(int k, const ConstVectorRef& x) const override {
-    const Vector e = x - r_[k];
-    return 0.5 * e.dot(S_[k] * e);
+    double v = 0;
+    for (int j = 0; j < x.size(); ++j) {
+      for (int i = 0; i < x.size(); ++i) v += (x(i) - r_[k](i)) * S_[k](i, j) * (x(j) - r_[k](j));
+    }
+    return 0.5 * v;
   }
   void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
                               MatrixRef phixx) const override {
-    phix.noalias() = S_[k] * (x - r_[k]);
+    phix.noalias() = S_[k] * x;
+    phix.noalias() -= S_[k] * r_[k];
     phixx = S_[k];
   }
 };

@@ -1,0 +1,252 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// OnlineController (33)-(34): against an independent evaluation of (33)-(34), the time
+// mapping and its clamping, robustness to non-finite input, int |du|^2, no allocation.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/backward_pass.h"
+#include "ddoc/online_controller.h"
+#include "ddoc/plant.h"
+#include "malloc_counter.h"
+#include "test_systems.h"
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// Two modes (n = 4 then 3, rectangular reset), m inputs.
+struct ControlSetup {
+  std::unique_ptr<LinearSwitchedSystem> sys;
+  std::unique_ptr<QuadraticCost> cost;
+  Problem problem;
+  Trajectory nominal;
+  BackwardPass pass;
+
+  explicit ControlSetup(int m, int n0 = 4, int n1 = 3, double umax = 1.0) {
+    std::mt19937 rng(1);
+    std::normal_distribution<double> nd;
+    auto rnd = [&](int r, int c, double s) {
+      Matrix M(r, c);
+      for (int i = 0; i < r * c; ++i) M.data()[i] = s * nd(rng);
+      return M;
+    };
+    Matrix E0 = rnd(n1, n0, 0.5);
+    sys = std::make_unique<LinearSwitchedSystem>(
+        std::vector<Matrix>{rnd(n0, n0, 0.3), rnd(n1, n1, 0.3)},
+        std::vector<Matrix>{rnd(n0, m, 1.0), rnd(n1, m, 1.0)},
+        std::vector<Matrix>{E0, Matrix::Identity(n0, n1)});
+    Matrix R = rnd(m, m, 0.3);
+    R = R * R.transpose() + Matrix::Identity(m, m);
+    cost = std::make_unique<QuadraticCost>(
+        std::vector<Matrix>{Matrix::Identity(n0, n0), 2 * Matrix::Identity(n1, n1)},
+        std::vector<Matrix>{R, 0.5 * R}, std::vector<double>{0.1, 0.2},
+        std::vector<Matrix>{Matrix::Identity(n0, n0), 3 * Matrix::Identity(n1, n1)},
+        std::vector<Vector>{Vector::Constant(n0, 0.2), Vector::Constant(n1, -0.1)});
+    problem.system = sys.get();
+    problem.cost = cost.get();
+    problem.bounds.u_min = Vector::Constant(m, -umax);
+    problem.bounds.u_max = Vector::Constant(m, umax);
+    problem.bounds.duration_min = Vector::Constant(2, 0.1);
+    problem.bounds.duration_max = Vector::Constant(2, 3.0);
+    problem.surface_weights = Vector::Zero(2);
+    Vector D(2);
+    D << 0.3, 0.3;
+    FunctionPolicy policy(D, [m](int, double tau, const ConstVectorRef&, VectorRef u) {
+      for (int i = 0; i < m; ++i) u(i) = 0.3 * std::sin(tau + i);
+    });
+    ModelPlant plant(problem);
+    Vector x0 = Vector::Constant(n0, 0.5);
+    plant.Run(x0, policy, &nominal);
+    pass.Allocate(problem, nominal.total_samples());
+    pass.Run(nominal);
+  }
+};
+
+// Brute-force box QP for m <= 4: enumerate active sets.
+Vector BruteBoxQp(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi) {
+  const int n = static_cast<int>(g.size());
+  int combos = 1;
+  for (int i = 0; i < n; ++i) combos *= 3;
+  Vector best;
+  double best_value = 1e300;
+  for (int c = 0; c < combos; ++c) {
+    Vector x = Vector::Zero(n);
+    std::vector<int> fr;
+    int code = c;
+    for (int i = 0; i < n; ++i, code /= 3) {
+      if (code % 3 == 0) x(i) = lo(i);
+      else if (code % 3 == 1) x(i) = hi(i);
+      else fr.push_back(i);
+    }
+    if (!fr.empty()) {
+      const int nf = static_cast<int>(fr.size());
+      Matrix Hf(nf, nf);
+      Vector r(nf);
+      for (int a = 0; a < nf; ++a) {
+        r(a) = -g(fr[a]);
+        for (int i = 0; i < n; ++i) {
+          if (std::find(fr.begin(), fr.end(), i) == fr.end()) r(a) -= H(fr[a], i) * x(i);
+        }
+        for (int b = 0; b < nf; ++b) Hf(a, b) = H(fr[a], fr[b]);
+      }
+      const Vector xf = Hf.ldlt().solve(r);
+      for (int a = 0; a < nf; ++a) x(fr[a]) = xf(a);
+    }
+    bool ok = true;
+    for (int i = 0; i < n; ++i) ok &= x(i) >= lo(i) - 1e-12 && x(i) <= hi(i) + 1e-12;
+    const double v = 0.5 * x.dot(H * x) + g.dot(x);
+    if (ok && v < best_value) {
+      best_value = v;
+      best = x;
+    }
+  }
+  return best;
+}
+
+TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
+  ControlSetup s(3);
+  const double alpha = 0.7;
+  Vector dT(2);
+  dT << 0.02, -0.01;
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Load(s.nominal, s.pass, alpha, dT);
+  EXPECT_NEAR(ctrl.PlannedDuration(0), s.nominal.T(0) + 0.02, 1e-12);
+  EXPECT_NEAR(ctrl.PlannedDuration(1), s.nominal.T(1) - s.nominal.T(0) - 0.03, 1e-12);
+  std::mt19937 rng(4);
+  std::normal_distribution<double> nd;
+  int active_cases = 0;
+  for (int k = 0; k < 2; ++k) {
+    const int n = s.sys->state_dim(k);
+    for (int j : {0, 5, 77, s.pass.num_samples(k) - 1}) {
+      const double tau = s.pass.tau(k, j);
+      const double t = (tau - k) * ctrl.PlannedDuration(k);
+      Vector x = s.nominal.modes[k].x.col(j);
+      Vector dx(n);
+      for (int i = 0; i < n; ++i) dx(i) = 0.5 * nd(rng);
+      x += dx;
+      // Independent (34) and (33).
+      Vector dz(n + 2);
+      dz << dx, dT;
+      const Vector b = s.pass.Gain(k, j) * dz + s.pass.Feedforward(k, j);
+      const Vector unom = s.nominal.modes[k].u.col(j);
+      const Vector du = BruteBoxQp(s.pass.Luu(k, j), alpha * b, s.problem.bounds.u_min - unom,
+                                   s.problem.bounds.u_max - unom);
+      Vector u(3);
+      ctrl.Step(k, t, x, u);
+      EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
+      for (int i = 0; i < 3; ++i) {
+        active_cases += std::abs(u(i)) >= 1.0 - 1e-12;
+      }
+    }
+  }
+  EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
+}
+
+TEST(OnlineController, TimeMappingClampsAndInterpolates) {
+  ControlSetup s(2);
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Load(s.nominal, s.pass, 1.0, Vector::Zero(2));
+  Vector u(2), u_end(2), u_mid(2);
+  // On the nominal state with dT = 0, u differs from u^i only by alpha*L_uu^{-1}(L_u+F_u^T p).
+  const int N0 = s.pass.num_samples(0);
+  const Vector x_end = s.nominal.modes[0].x.col(N0 - 1);
+  ctrl.Step(0, s.nominal.T(0), x_end, u_end);
+  ctrl.Step(0, 10.0 * s.nominal.T(0), x_end, u);  // mode lasts longer than planned
+  EXPECT_NEAR(ctrl.last_tau(), 1.0, 0);
+  EXPECT_LT((u - u_end).norm(), 1e-12);
+  ctrl.Step(0, -1.0, s.nominal.modes[0].x.col(0), u);  // before the start: tau = 0
+  EXPECT_EQ(ctrl.last_tau(), 0.0);
+  // Midway between samples 10 and 11 with the interpolated nominal state.
+  const double tau = 0.5 * (s.pass.tau(0, 10) + s.pass.tau(0, 11));
+  const Vector xm = 0.5 * (s.nominal.modes[0].x.col(10) + s.nominal.modes[0].x.col(11));
+  ctrl.Step(0, tau * s.nominal.T(0), xm, u_mid);
+  Vector u10(2), u11(2);
+  ctrl.Step(0, s.pass.tau(0, 10) * s.nominal.T(0), s.nominal.modes[0].x.col(10), u10);
+  ctrl.Step(0, s.pass.tau(0, 11) * s.nominal.T(0), s.nominal.modes[0].x.col(11), u11);
+  // With dx = 0, b is interpolated linearly; without active bounds u is then linear too up to
+  // the interpolation of L_uu (constant here).
+  EXPECT_LT((u_mid - 0.5 * (u10 + u11)).norm(), 1e-9);
+}
+
+TEST(OnlineController, NonFiniteStateGivesClampedNominalInput) {
+  ControlSetup s(2);
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Load(s.nominal, s.pass, 1.0, Vector::Zero(2));
+  Vector x = s.nominal.modes[0].x.col(3);
+  x(1) = std::numeric_limits<double>::quiet_NaN();
+  Vector u(2);
+  ctrl.Step(0, s.nominal.modes[0].t(3), x, u);
+  EXPECT_TRUE(u.allFinite());
+  EXPECT_EQ(ctrl.nonfinite_count(), 1);
+  EXPECT_LT((u - s.nominal.modes[0].u.col(3)).norm(), 1e-9);
+  ctrl.Step(0, std::numeric_limits<double>::infinity(), s.nominal.modes[0].x.col(3), u);
+  EXPECT_TRUE(u.allFinite());
+  EXPECT_EQ(ctrl.nonfinite_count(), 2);
+  // Wrong sizes and modes are programming errors.
+  Vector wrong(5);
+  EXPECT_THROW(ctrl.Step(0, 0.0, wrong, u), InvalidArgument);
+  EXPECT_THROW(ctrl.Step(2, 0.0, s.nominal.modes[0].x.col(0), u), InvalidArgument);
+  Vector u_wrong(3);
+  EXPECT_THROW(ctrl.Step(0, 0.0, s.nominal.modes[0].x.col(0), u_wrong), InvalidArgument);
+}
+
+TEST(OnlineController, AccumulatesDuSquaredOverTau) {
+  ControlSetup s(2, 4, 3, 100.0);  // wide bounds: du unconstrained
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Load(s.nominal, s.pass, 0.5, Vector::Zero(2));
+  // Run on the model plant: the integral equals a left Riemann sum of |du|^2 over tau.
+  ModelPlant plant(s.problem);
+  Trajectory out;
+  plant.Run(s.nominal.x0, ctrl, &out);
+  EXPECT_GT(ctrl.du_squared_integral(), 0.0);
+  // Cross-check against the learner's measured definition on this trial.
+  double measured = 0;
+  for (int k = 0; k < 2; ++k) {
+    const auto& mode = out.modes[k];
+    int cursor = 0;
+    // The controller sees no Step after the last one of a mode: the interval before the
+    // switch is not part of its sum.
+    for (int j = 0; j + 2 < mode.num_samples(); ++j) {
+      const double tau = out.Tau(k, j), tau1 = out.Tau(k, j + 1);
+      // nominal input at tau by linear interpolation
+      const auto& nm = s.nominal.modes[k];
+      while (cursor < nm.num_samples() - 2 && s.nominal.Tau(k, cursor + 1) < tau) ++cursor;
+      const double t0 = s.nominal.Tau(k, cursor), t1 = s.nominal.Tau(k, cursor + 1);
+      const double w = std::min(1.0, std::max(0.0, (tau - t0) / (t1 - t0)));
+      const Vector unom = (1 - w) * nm.u.col(cursor) + w * nm.u.col(cursor + 1);
+      measured += (mode.u.col(j) - unom).squaredNorm() * (tau1 - tau);
+    }
+  }
+  EXPECT_NEAR(ctrl.du_squared_integral(), measured, 1e-9 * (1 + measured));
+}
+
+TEST(OnlineController, StepDoesNotAllocate) {
+  ASSERT_TRUE(MallocCountingWorks());
+  ControlSetup s(4, 14, 10);  // hopper-like sizes
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, 2000);
+  ctrl.Load(s.nominal, s.pass, 0.5, Vector::Constant(2, 0.01));
+  Vector u(4);
+  Vector x0 = s.nominal.modes[0].x.col(0) + Vector::Constant(14, 0.3);
+  Vector x1 = s.nominal.modes[1].x.col(0) + Vector::Constant(10, -0.3);
+  ctrl.BeginTrial();
+  const Vector zero = Vector::Zero(2);
+  MallocCounter counter;
+  for (int i = 0; i < 300; ++i) ctrl.Step(0, i * 1e-3, x0, u);
+  for (int i = 0; i < 300; ++i) ctrl.Step(1, i * 1e-3, x1, u);
+  EXPECT_EQ(counter.count(), 0) << "Step";
+  // Reloading between trials does not allocate either.
+  ctrl.Load(s.nominal, s.pass, 0.25, zero);
+  EXPECT_EQ(counter.count(), 0) << "Load";
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
