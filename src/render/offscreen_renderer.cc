@@ -166,6 +166,7 @@ std::unique_ptr<OffscreenRenderer> OffscreenRenderer::Create(const mjModel* m,
 
   // Scene and camera.
   r->scene_.flags[mjRND_SHADOW] = settings.shadows ? 1 : 0;
+  r->scene_.flags[mjRND_REFLECTION] = settings.reflection ? 1 : 0;
   mjv_defaultOption(&r->option_);
   mjv_defaultFreeCamera(m, &r->camera_);
   r->camera_.type = mjCAMERA_FREE;
