@@ -2,16 +2,14 @@
 #include "ddoc/mujoco/hopper_sim.h"
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
+
+#include "mjcf_precheck.h"
 
 namespace ddoc {
 
 MjModelPtr LoadMjcf(const std::string& path) {
-  {
-    std::ifstream f(path);
-    if (!f.good()) throw HopperSimError("cannot load MJCF '" + path + "': file not found");
-  }
+  PrecheckMjcf(path);  // file, XML syntax, masses/inertias: errors name file, line, element
   char err[1024] = {0};
   mjModel* m = mj_loadXML(path.c_str(), nullptr, err, sizeof(err));
   if (!m) throw HopperSimError("cannot load MJCF '" + path + "': " + err);

@@ -1,0 +1,136 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+// The MJCF variants and the errors for bad MJCF input.
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/mujoco/hopper_sim.h"
+#include "model_files.h"
+
+namespace ddoc {
+namespace {
+
+using testing::ModelCopy;
+using testing::ModelPath;
+
+TEST(HopperMjcfTest, VariantsLoadWithDeclaredMassAndDrag) {
+  struct Case {
+    const char* file;
+    double torso_mass;
+    double cd;
+  };
+  for (const Case& c : {Case{"hopper.xml", 10.0, 0.0}, Case{"hopper_m8.xml", 8.0, 0.01},
+                        Case{"hopper_m12.xml", 12.0, 0.01}}) {
+    HopperSim sim(ModelPath(c.file));
+    const mjModel* m = sim.model();
+    EXPECT_DOUBLE_EQ(m->body_mass[sim.mapping().body_torso], c.torso_mass) << c.file;
+    EXPECT_DOUBLE_EQ(sim.mapping().drag_cd, c.cd) << c.file;
+    EXPECT_DOUBLE_EQ(sim.mapping().beta, 20.0) << c.file;
+    EXPECT_DOUBLE_EQ(sim.mapping().r0, 0.7) << c.file;
+    const HopperParams p = LoadHopperParamsFromMjcf(ModelPath(c.file));
+    // M is the flight mass: torso + 1 g leg + 2 g foot.
+    EXPECT_NEAR(p.M, c.torso_mass + 0.003, 1e-12) << c.file;
+    EXPECT_NEAR(p.J_body, 2.5, 1e-12);
+    // J_leg = 0.25 (leg) + the foot's m r0^2 = 0.002 * 0.49 (+ its own 3e-9).
+    EXPECT_NEAR(p.J_leg, 0.25 + 0.002 * 0.49, 1e-8);
+    EXPECT_NEAR(p.r0, 0.7, 1e-12);
+    EXPECT_DOUBLE_EQ(p.c_d, c.cd);
+    EXPECT_NEAR(p.g, 9.81, 1e-12);
+  }
+}
+
+TEST(HopperMjcfTest, ANewVariantIsOneEditedFile) {
+  ModelCopy copy;
+  std::string text = testing::ReadText(copy.Path("hopper_m12.xml"));
+  copy.Write("hopper_m9.xml", text);
+  copy.Edit("hopper_m9.xml", "mass=\"12\"", "mass=\"9.5\"");
+  copy.Edit("hopper_m9.xml", "name=\"drag_cd\" data=\"0.01\"", "name=\"drag_cd\" data=\"0.03\"");
+  const HopperParams p = LoadHopperParamsFromMjcf(copy.Path("hopper_m9.xml"));
+  EXPECT_NEAR(p.M, 9.503, 1e-12);
+  EXPECT_DOUBLE_EQ(p.c_d, 0.03);
+}
+
+// Expects HopperSimError whose message contains every string of `needles`.
+void ExpectError(const std::string& path, std::initializer_list<std::string> needles) {
+  try {
+    HopperSim sim(path);
+    FAIL() << "no error for " << path;
+  } catch (const HopperSimError& e) {
+    const std::string msg = e.what();
+    for (const std::string& n : needles) {
+      EXPECT_NE(msg.find(n), std::string::npos) << "message lacks '" << n << "': " << msg;
+    }
+  }
+}
+
+TEST(HopperMjcfTest, MalformedXmlNamesFileAndLine) {
+  ModelCopy copy;
+  copy.Edit("hopper_limbs.xml", "<body name=\"foot\" pos=\"0 0 -0.7\">", "<body name=\"foot\" pos=");
+  ExpectError(copy.Path("hopper.xml"), {"hopper_limbs.xml", "malformed XML", "line"});
+  ExpectError(copy.Path("does_not_exist.xml"), {"does_not_exist.xml", "not found"});
+}
+
+TEST(HopperMjcfTest, MissingNamesAreReported) {
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_limbs.xml", "<body name=\"leg\"", "<body name=\"shank\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no body named 'leg'"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_limbs.xml", "<joint name=\"hip\"", "<joint name=\"hip2\"");
+    // The actuator refers to joint 'hip' too: MuJoCo's compiler names it.
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "hip"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_limbs.xml", "<joint name=\"pitch\"", "<joint name=\"yaw\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no joint named 'pitch'"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_limbs.xml", "<geom name=\"foot\"", "<geom name=\"toe\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no geom named 'foot'"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_common.xml", "name=\"floor\"", "name=\"ground\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no geom named 'floor'"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_common.xml", "name=\"leg_motor\"", "name=\"knee_motor\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no actuator named 'leg_motor'"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_common.xml", "joint=\"hip\" gear=\"-1\"", "joint=\"hip\" gear=\"1\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "hip_motor", "gear -1"});
+  }
+}
+
+TEST(HopperMjcfTest, NonPositiveMassOrInertiaNamesFileLineAndBody) {
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_m8.xml", "mass=\"8\"", "mass=\"0\"");
+    ExpectError(copy.Path("hopper_m8.xml"), {"hopper_m8.xml", "line", "body 'torso'", "mass = 0"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_m12.xml", "mass=\"12\"", "mass=\"-12\"");
+    ExpectError(copy.Path("hopper_m12.xml"), {"hopper_m12.xml", "body 'torso'", "mass = -12"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper_limbs.xml", "diaginertia=\"0.25 0.25 0.25\"", "diaginertia=\"0.25 0 0.25\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper_limbs.xml", "line", "body 'leg'", "diaginertia"});
+  }
+  {
+    ModelCopy copy;
+    copy.Edit("hopper.xml", "diaginertia=\"2.5 2.5 2.5\"", "diaginertia=\"-2.5 2.5 2.5\"");
+    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "body 'torso'", "diaginertia"});
+  }
+}
+
+}  // namespace
+}  // namespace ddoc
