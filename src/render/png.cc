@@ -6,11 +6,42 @@
 #include <cstring>
 
 #include <lodepng.h>
+#ifdef DDOC_RENDER_USE_ZLIB
+#include <cstdlib>
+
+#include <zlib.h>
+#endif
 
 namespace ddoc {
+namespace {
+
+#ifdef DDOC_RENDER_USE_ZLIB
+// lodepng's custom_zlib hook: a complete zlib stream (header, deflate data, adler32) from
+// zlib's compress2, at the level passed through custom_context. lodepng frees *out with
+// free(), so allocate with malloc.
+unsigned ZlibCompress(unsigned char** out, size_t* out_size, const unsigned char* in,
+                      size_t in_size, const LodePNGCompressSettings* settings) {
+  const int level = *static_cast<const int*>(settings->custom_context);
+  uLongf size = compressBound(static_cast<uLong>(in_size));
+  unsigned char* buffer = static_cast<unsigned char*>(std::malloc(size));
+  if (!buffer) return 83;  // lodepng's "memory allocation failed"
+  if (compress2(buffer, &size, in, static_cast<uLong>(in_size), level) != Z_OK) {
+    std::free(buffer);
+    return 111;  // lodepng's "custom zlib or inflate decompression failed"
+  }
+  *out = buffer;
+  *out_size = size;
+  return 0;
+}
+const int kFastLevel = 2;
+const int kSmallLevel = 9;
+#endif
+
+}  // namespace
 
 bool EncodePng(const std::vector<unsigned char>& rgb, int width, int height,
-               std::vector<unsigned char>* png, std::string* error) {
+               std::vector<unsigned char>* png, std::string* error,
+               PngCompression compression) {
   const size_t expected = 3 * static_cast<size_t>(width > 0 ? width : 0) *
                           static_cast<size_t>(height > 0 ? height : 0);
   if (width <= 0 || height <= 0 || rgb.size() != expected) {
@@ -20,16 +51,26 @@ bool EncodePng(const std::vector<unsigned char>& rgb, int width, int height,
     }
     return false;
   }
-  // 8-bit RGB in, 8-bit RGB out, no palette search. Row filter "none": rendered frames
-  // are mostly flat colour, where deflate alone does well and the adaptive filter search
-  // triples the encode time (see png.h).
+  // 8-bit RGB in, 8-bit RGB out, no palette search. kFast uses row filter "none":
+  // rendered frames are mostly flat colour, where deflate alone does well, and the
+  // adaptive filter search would triple the encode time (see png.h).
   lodepng::State state;
   state.info_raw.colortype = LCT_RGB;
   state.info_raw.bitdepth = 8;
   state.info_png.color.colortype = LCT_RGB;
   state.info_png.color.bitdepth = 8;
   state.encoder.auto_convert = 0;
-  state.encoder.filter_strategy = LFS_ZERO;
+  const bool fast = compression == PngCompression::kFast;
+  state.encoder.filter_strategy = fast ? LFS_ZERO : LFS_MINSUM;
+#ifdef DDOC_RENDER_USE_ZLIB
+  state.encoder.zlibsettings.custom_zlib = ZlibCompress;
+  state.encoder.zlibsettings.custom_context = fast ? &kFastLevel : &kSmallLevel;
+#else
+  if (!fast) {
+    state.encoder.zlibsettings.windowsize = 32768;
+    state.encoder.zlibsettings.nicematch = 258;
+  }
+#endif
   png->clear();
   const unsigned code = lodepng::encode(*png, rgb, static_cast<unsigned>(width),
                                         static_cast<unsigned>(height), state);
@@ -61,9 +102,9 @@ bool WriteFileBytes(const std::string& path, const std::vector<unsigned char>& b
 }
 
 bool WritePng(const std::string& path, const std::vector<unsigned char>& rgb, int width,
-              int height, std::string* error) {
+              int height, std::string* error, PngCompression compression) {
   std::vector<unsigned char> png;
-  if (!EncodePng(rgb, width, height, &png, error)) return false;
+  if (!EncodePng(rgb, width, height, &png, error, compression)) return false;
   return WriteFileBytes(path, png, error);
 }
 

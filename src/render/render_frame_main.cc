@@ -101,7 +101,8 @@ int main(int argc, char** argv) {
   std::vector<unsigned char> rgb;
   renderer->Render(m.get(), d.get(), text.empty() ? "" : labels, text.empty() ? "" : values,
                    &rgb);
-  if (!ddoc::WritePng(out_path, rgb, renderer->width(), renderer->height(), &error)) {
+  if (!ddoc::WritePng(out_path, rgb, renderer->width(), renderer->height(), &error,
+                      ddoc::PngCompression::kSmall)) {
     std::cerr << "ddoc-render-frame: " << error << "\n";
     return 1;
   }
