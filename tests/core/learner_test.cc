@@ -205,6 +205,89 @@ TEST(Learner, AllThreeMethodsAgreeWithAnExactModel) {
   EXPECT_LT((c.r_mrl.T - c.r_alg1.T).norm(), 1e-6);
 }
 
+TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  LearnerSettings settings = TestSettings();
+  settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
+  settings.gamma = 0.5;
+  settings.alpha_min = 0.1;
+  Learner learner(p.problem, settings);
+  Trajectory measured;
+  plant.Run(lq.x0, initial, &measured);
+  EXPECT_THROW(learner.NextTrial(), InvalidArgument);  // not initialized
+  learner.Initialize(measured);
+  const double cost0 = learner.nominal_cost();
+  const Vector T0 = learner.nominal().T;
+  EXPECT_THROW(learner.CompleteTrial(measured), InvalidArgument);  // no trial pending
+  double alpha = 1.0;
+  for (int i = 0; i < 4; ++i) {
+    OnlineController& policy = learner.NextTrial();
+    EXPECT_DOUBLE_EQ(policy.alpha(), alpha);
+    plant.Run(lq.x0, policy, &measured);
+    const TrialResult r = learner.CompleteTrial(measured);
+    EXPECT_FALSE(r.accepted);
+    EXPECT_LT(r.decrease, 0.0) << "the trial itself did reduce the cost";
+    alpha *= 0.5;
+    EXPECT_DOUBLE_EQ(learner.alpha(), alpha);
+    EXPECT_EQ(learner.nominal().T, T0);
+    EXPECT_EQ(learner.nominal_cost(), cost0);
+  }
+  EXPECT_EQ(learner.status(), LearnerStatus::kLineSearchFailed);  // 1/16 < 0.1
+  // Terminated without an accepted trial: the next policy replays u^0 (alpha = 0).
+  OnlineController& replay = learner.NextTrial();
+  EXPECT_EQ(replay.alpha(), 0.0);
+  plant.Run(lq.x0, replay, &measured);
+  EXPECT_NEAR(EvaluateCost(p.problem, measured).total, cost0, 1e-9 * cost0);
+  // An aborted trial (robot fell) also counts as rejected.
+  Learner other(p.problem, TestSettings());
+  other.Initialize(measured);
+  other.NextTrial();
+  const TrialResult aborted = other.AbortTrial();
+  EXPECT_FALSE(aborted.accepted);
+  EXPECT_DOUBLE_EQ(other.alpha(), TestSettings().gamma);
+}
+
+TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  LearnerSettings settings = TestSettings();
+  settings.alpha_min = 0.3;  // two rejections in a row terminate
+  Learner learner(p.problem, settings);
+  Trajectory measured;
+  plant.Run(lq.x0, initial, &measured);
+  learner.Initialize(measured);
+  int accepted = 0;
+  while (learner.status() != LearnerStatus::kLineSearchFailed && learner.trials() < 500) {
+    OnlineController& policy = learner.NextTrial();
+    const Vector planned = policy.planned_T();
+    plant.Run(lq.x0, policy, &measured);
+    const double before = learner.nominal_cost();
+    const TrialResult r = learner.CompleteTrial(measured);
+    if (r.accepted) {
+      ++accepted;
+      // The measured trial is the new nominal; time-based switching follows the plan.
+      EXPECT_LT((learner.nominal().T - planned).norm(), 1e-9);
+      EXPECT_EQ(learner.nominal_cost(), r.cost);
+      EXPECT_LT(r.cost, before);
+      EXPECT_DOUBLE_EQ(learner.alpha(), 1.0);
+    }
+  }
+  ASSERT_EQ(learner.status(), LearnerStatus::kLineSearchFailed);
+  ASSERT_GT(accepted, 3);
+  // The terminated learner applies the law that produced the last accepted trial: on this
+  // deterministic plant it reproduces that trial.
+  plant.Run(lq.x0, learner.NextTrial(), &measured);
+  EXPECT_NEAR(EvaluateCost(p.problem, measured).total, learner.nominal_cost(),
+              1e-9 * learner.nominal_cost());
+}
+
 INSTANTIATE_TEST_SUITE_P(WithAndWithoutPreviousDu, TwoModeLqTest, ::testing::Bool());
 
 }  // namespace
