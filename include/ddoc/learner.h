@@ -23,6 +23,10 @@ struct LearnerSettings {
   double c = 1e-4;              ///< sufficient-decrease constant c of (36), > 0
   double gamma = 0.5;           ///< backtracking factor: alpha <- gamma alpha, in (0, 1)
   double alpha_initial = 1.0;   ///< alpha at the start and after every accepted trial, in (0, 1]
+  /// Algorithm 1 restarts every iteration at alpha = alpha_initial (true). false: after an
+  /// accepted trial alpha <- min(alpha_initial, alpha / gamma), so a robot that needed a small
+  /// alpha does not spend a run of rejected trials backtracking again every iteration.
+  bool reset_alpha_on_accept = true;
   double alpha_min = 1e-6;      ///< line search fails (terminated) when alpha drops below
   double epsilon = 1e-8;        ///< convergence: int |du|^2 dtau + |dT|^2 <= epsilon ...
   int delta_i = 2;              ///< ... for the last delta_i accepted iterations (Delta i)
@@ -118,8 +122,10 @@ class Learner {
                     Policy& initial_policy);
 
   /// The converged feed-forward + feedback law: (33)-(34) around the current nominal with
-  /// alpha = 1 and dT = 0 (planned T = nominal T). Used by OC-FB on the real plant.
-  OnlineController& ConvergedPolicy();
+  /// dT = 0 (planned T = nominal T) and the given alpha. Used by OC-FB on the real plant.
+  /// With settings.controller.alpha_scales_feedback = false and alpha = 0 it is exactly
+  /// "nominal inputs + feedback on dx", whether or not the gradient L_u + F_u^T p has vanished.
+  OnlineController& ConvergedPolicy(double alpha = 1.0);
 
   LearnerStatus status() const { return status_; }
   bool converged() const { return status_ == LearnerStatus::kConverged; }

@@ -24,6 +24,11 @@ struct OnlineControllerSettings {
   bool interpolate = true;
   /// Warm-start the box QP with the previous step's du.
   bool warm_start = true;
+  /// true (the paper's (33)): alpha multiplies all of b, feedback included, so alpha -> 0
+  /// replays the nominal inputs open loop. false (the DDP convention): alpha multiplies only the
+  /// feed-forward L_u + F_u^T p; the feedback (L_uz + F_u^T P)[dx; dT_alpha] stays whole, so
+  /// alpha -> 0 tracks the nominal trajectory with feedback. dT_alpha comes from (31) either way.
+  bool alpha_scales_feedback = true;
   BoxQPSettings qp;  ///< settings of the m-dimensional box QP
 };
 
@@ -102,6 +107,7 @@ class OnlineController : public Policy {
   Matrix u_;    // m x S: nominal inputs
   Matrix Kx_;   // m * n_max x S: state gain (L_uz + F_u^T P)(:, 0:n_k), column-major m x n_k
   Matrix c_;    // m x S: (L_uz + F_u^T P)(:, n_k:) dT + L_u + F_u^T p
+  Matrix cff_;  // m x S: L_u + F_u^T p (the feed-forward part of c_)
   Matrix luu_;  // m^2 x S
   // Step workspace.
   BoxQP qp_;

@@ -94,10 +94,10 @@ OnlineController& Learner::NextTrial() {
   return controllers_[active_];
 }
 
-OnlineController& Learner::ConvergedPolicy() {
+OnlineController& Learner::ConvergedPolicy(double alpha) {
   if (!initialized_) throw InvalidArgument("Learner::ConvergedPolicy: call Initialize first");
   const int slot = accepted_ == active_ ? 1 - active_ : active_;
-  controllers_[slot].Load(nominal_, pass_, 1.0, Vector::Zero(problem_->num_modes()));
+  controllers_[slot].Load(nominal_, pass_, alpha, Vector::Zero(problem_->num_modes()));
   return controllers_[slot];
 }
 
@@ -194,7 +194,9 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     step_history_.push_back(r.step);
     accepted_ = active_;
     active_ = 1 - active_;
-    alpha_ = settings_.alpha_initial;
+    alpha_ = settings_.reset_alpha_on_accept
+                 ? settings_.alpha_initial
+                 : std::min(settings_.alpha_initial, alpha_ / settings_.gamma);
     const int n = static_cast<int>(step_history_.size());
     bool converged = n >= settings_.delta_i;
     for (int i = std::max(0, n - settings_.delta_i); i < n && converged; ++i) {

@@ -34,6 +34,7 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   u_.setZero(m_, max_samples);
   Kx_.setZero(m_ * n_max_, max_samples);
   c_.setZero(m_, max_samples);
+  cff_.setZero(m_, max_samples);
   luu_.setZero(m_ * m_, max_samples);
   qp_ = BoxQP(m_, settings.qp);
   dx_.setZero(n_max_);
@@ -100,6 +101,7 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
       Eigen::Map<Matrix>(Kx_.col(s).data(), m_, n) = gain.leftCols(n);
       auto c = c_.col(s);
       c = pass.Feedforward(k, j);
+      cff_.col(s) = c;
       c.noalias() += gain.rightCols(K_) * dT;
       luu_.col(s) = Eigen::Map<const Vector>(pass.Luu(k, j).data(), m_ * m_);
     }
@@ -181,7 +183,11 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   b_ = (1.0 - w) * c_.col(s0) + w * c_.col(s1);
   b_.noalias() += (1.0 - w) * K0 * dx;
   b_.noalias() += w * K1 * dx;
-  b_ *= alpha_;
+  if (settings_.alpha_scales_feedback) {
+    b_ *= alpha_;  // (33) as printed
+  } else {
+    b_.noalias() -= (1.0 - alpha_) * ((1.0 - w) * cff_.col(s0) + w * cff_.col(s1));
+  }
   // H = L_uu(tau) + mu I.
   H_ = (1.0 - w) * Eigen::Map<const Matrix>(luu_.col(s0).data(), m_, m_) +
        w * Eigen::Map<const Matrix>(luu_.col(s1).data(), m_, m_);
