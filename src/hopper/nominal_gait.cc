@@ -62,7 +62,7 @@ Vec6 Residual(const HopperModel& model, const HopperCostWeights& w, const Nomina
 
 /// Levenberg-Marquardt on Residual with a central-difference Jacobian.
 Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGaitSettings& s,
-           double speed, Vec6 p) {
+           double speed, Vec6 p, bool hold_yd0) {
   double lambda = 1e-3;
   Vec6 res = Residual(model, w, s, speed, p, nullptr);
   for (int it = 0; it < s.max_iterations; ++it) {
@@ -75,12 +75,17 @@ Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGa
       jac.col(i) = (Residual(model, w, s, speed, pp, nullptr) -
                     Residual(model, w, s, speed, pm, nullptr)) / (2.0 * h);
     }
+    // Optionally yd0 (index 2) is held at the value that sets the requested apex height: with
+    // drag a constant-input hop cannot be periodic, and a free yd0 may drift to the degenerate
+    // "no hop" solution yd0 -> 0.
+    if (hold_yd0) jac.col(2).setZero();
     const Mat6 jtj = jac.transpose() * jac;
     const Vec6 jtr = jac.transpose() * res;
     bool improved = false;
     for (int tries = 0; tries < 12; ++tries) {
       Mat6 a = jtj;
       a.diagonal() += lambda * (jtj.diagonal().array() + 1e-9).matrix();
+      if (hold_yd0) a(2, 2) += 1.0;  // no step in the held yd0
       const Vec6 step = -a.ldlt().solve(jtr);
       const Vec6 p_new = p + step;
       const Vec6 res_new = Residual(model, w, s, speed, p_new, nullptr);
@@ -118,11 +123,20 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
   const HopperCostWeights w;
   // Start from vertical hopping in place (exactly periodic: theta = 0 gives v_f_theta = 0) and
   // ramp the forward speed, re-solving at each stage.
-  Vec6 p;
-  p << 0.0, 0.0, std::sqrt(2.0 * params.g * (s.apex_height - params.r0)), 0.0, 0.0, 0.0;
-  for (int stage = 1; stage <= s.continuation_stages; ++stage) {
-    const double speed = s.forward_speed * stage / s.continuation_stages;
-    p = Solve(model, w, s, speed, p);
+  // yd0 is free first (exactly periodic gaits exist without drag); if the search collapses to a
+  // hop whose apex is less than a quarter of the way from r0 to apex_height, redo it with yd0 held.
+  Vec6 start;
+  start << 0.0, 0.0, std::sqrt(2.0 * params.g * (s.apex_height - params.r0)), 0.0, 0.0, 0.0;
+  Vec6 p = start;
+  for (bool hold : {false, true}) {
+    p = start;
+    for (int stage = 1; stage <= s.continuation_stages; ++stage) {
+      const double speed = s.forward_speed * stage / s.continuation_stages;
+      p = Solve(model, w, s, speed, p, hold);
+    }
+    HopResult hop;
+    Residual(model, w, s, s.forward_speed, p, &hop);
+    if (hop.ok && hop.apex > params.r0 + 0.25 * (s.apex_height - params.r0)) break;
   }
   NominalGait g;
   Assemble(params, s, s.forward_speed, p, &g.x0, &g.u0);

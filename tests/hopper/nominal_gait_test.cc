@@ -47,6 +47,13 @@ TEST(NominalGaitTest, HeavyRobotStillHops) {
   // With drag a constant input cannot be exactly periodic; the residual is small but nonzero.
   EXPECT_LT(g.max_abs_residual, 0.05);
   EXPECT_GT(g.stance_time, 0.2);
+  // Hopping in place with drag: the free search would collapse to yd0 -> 0 (no hop); the
+  // fallback holds the requested apex.
+  s.forward_speed = 0.0;
+  const NominalGait g0 = FindNominalGait(p, s);
+  EXPECT_NEAR(g0.apex, 0.8, 0.01);
+  ExpectInDesignRange(g0);
+  EXPECT_LT(g0.max_abs_residual, 1e-3);
 }
 
 TEST(NominalGaitTest, RejectsBadSettings) {

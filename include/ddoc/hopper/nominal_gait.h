@@ -15,7 +15,7 @@ namespace ddoc {
 /// Settings of FindNominalGait.
 struct NominalGaitSettings {
   double forward_speed = 0.5;  ///< takeoff xd of the gait, m/s (held fixed by the search)
-  double apex_height = 0.8;    ///< initial guess of the apex COM height, m
+  double apex_height = 0.8;    ///< initial yd0 = sqrt(2 g (apex - r0)), m (held if the free search collapses)
   double k0_hip = 50.0;        ///< constant hip stiffness command, N m/rad (u0[2])
   double k0_leg = 2000.0;      ///< constant leg stiffness command, N/m (u0[3])
   int max_iterations = 60;     ///< Levenberg-Marquardt iterations per continuation stage
@@ -41,7 +41,10 @@ struct NominalGait {
 
 /// Shooting search (Levenberg-Marquardt, finite-difference Jacobian) over
 /// p = [theta0, phi0, yd0, thetad0, phid0, tau0] with xd0 = forward_speed, r = r0, F0 = 0,
-/// k = k0 (at rest), minimizing the Q-weighted takeoff-to-takeoff residual of I1.
+/// k = k0 (at rest), minimizing the Q-weighted takeoff-to-takeoff residual of I1, by continuation
+/// from vertical hopping at yd0 = sqrt(2 g (apex_height - r0)). If the result's apex is less than
+/// r0 + (apex_height - r0)/4 (with drag the free search can collapse to yd0 -> 0), the search is
+/// redone with yd0 held at its initial value.
 /// A constant-input hop is conservative except for the touchdown loss (41), so exact periodicity
 /// needs v_f_theta = 0 at touchdown; the residual left is reported in the result.
 /// Throws ddoc::InvalidArgument for invalid params/settings.
