@@ -1,0 +1,237 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Every validation error: empty mode sequences, mismatched dimensions, reversed or empty
+// bounds, non-finite inputs. Each message must name the offending quantity.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/cost.h"
+#include "ddoc/learner.h"
+#include "ddoc/switching_time_update.h"
+#include "test_systems.h"
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Expects InvalidArgument whose message contains `needle`.
+template <class F>
+void ExpectError(F&& f, const std::string& needle) {
+  try {
+    f();
+    ADD_FAILURE() << "expected InvalidArgument containing '" << needle << "'";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
+        << "message '" << e.what() << "' does not mention '" << needle << "'";
+  }
+}
+
+struct Base {
+  LinearSwitchedSystem sys{{Matrix::Zero(2, 2), Matrix::Zero(3, 3)},
+                           {Matrix::Ones(2, 1), Matrix::Ones(3, 1)},
+                           {Matrix::Ones(3, 2), Matrix::Ones(2, 3)}};
+  QuadraticCost cost{{Matrix::Identity(2, 2), Matrix::Identity(3, 3)},
+                     {Matrix::Identity(1, 1), Matrix::Identity(1, 1)},
+                     {0, 0},
+                     {Matrix::Identity(2, 2), Matrix::Identity(3, 3)},
+                     {Vector::Zero(2), Vector::Zero(3)}};
+  Problem problem;
+  Base() {
+    problem.system = &sys;
+    problem.cost = &cost;
+    problem.bounds.u_min = Vector::Constant(1, -1);
+    problem.bounds.u_max = Vector::Constant(1, 1);
+    problem.bounds.duration_min = Vector::Constant(2, 0.1);
+    problem.bounds.duration_max = Vector::Constant(2, 1.0);
+    problem.surface_weights = Vector::Zero(2);
+  }
+  Trajectory Valid() const {
+    Trajectory t;
+    t.modes.resize(2);
+    t.modes[0].t = Vector::LinSpaced(3, 0.0, 0.5);
+    t.modes[0].x = Matrix::Zero(2, 3);
+    t.modes[0].u = Matrix::Zero(1, 3);
+    t.modes[1].t = Vector::LinSpaced(4, 0.5, 1.0);
+    t.modes[1].x = Matrix::Zero(3, 4);
+    t.modes[1].u = Matrix::Zero(1, 4);
+    t.T = Eigen::Vector2d(0.5, 1.0);
+    t.x0 = Vector::Zero(2);
+    return t;
+  }
+};
+
+TEST(Validation, SwitchedSystemConstruction) {
+  using LS = LinearSwitchedSystem;
+  ExpectError([] { LS s({}, {Matrix::Ones(1, 1)}, {}); }, "empty mode sequence");
+  ExpectError([] { LS s({Matrix::Zero(0, 0)}, {Matrix::Ones(0, 1)}, {Matrix::Zero(0, 0)}); },
+              "state dimension n_0 = 0");
+  ExpectError([] { LS s({Matrix::Zero(2, 2)}, {Matrix::Ones(2, 0)}, {Matrix::Zero(2, 2)}); },
+              "input dimension m = 0");
+}
+
+TEST(Validation, SwitchedSystemCallsCheckSizesAndFiniteness) {
+  Base b;
+  Vector xdot(2), x(2), u(1);
+  x.setZero();
+  u.setZero();
+  ExpectError([&] { b.sys.Flow(0, Vector::Zero(3), u, xdot); }, "Flow(k=0): x has size 3, expected 2");
+  ExpectError([&] { b.sys.Flow(0, x, Vector::Zero(2), xdot); }, "u has size 2, expected 1");
+  ExpectError([&] { b.sys.Flow(5, x, u, xdot); }, "mode k = 5 out of range");
+  Vector bad = x;
+  bad(1) = kNaN;
+  ExpectError([&] { b.sys.Flow(0, bad, u, xdot); }, "x has a non-finite entry at index 1");
+  Matrix fx(2, 3), fu(2, 1);
+  ExpectError([&] { b.sys.FlowDerivatives(0, x, u, fx, fu); }, "fx is 2x3, expected 2x2");
+  Vector xn(2);
+  ExpectError([&] { b.sys.Reset(0, x, xn); }, "x_next has size 2, expected 3");
+  Vector x1(3);
+  x1.setZero();
+  Vector xn0(2);
+  ExpectError([&] { b.sys.Reset(1, x1, xn0); }, "no cycle reset");
+  Vector h(1);
+  ExpectError([&] { b.sys.Surface(0, x, h); }, "no switching surface");
+  Vector lx(2), lu(1);
+  Matrix lxx(2, 2), luu(1, 1), lux(1, 3);
+  ExpectError([&] { b.cost.RunningDerivatives(0, x, u, lx, lu, lxx, luu, lux); },
+              "lux is 1x3, expected 1x2");
+  ExpectError([&] { b.cost.Running(0, bad, u); }, "non-finite");
+}
+
+TEST(Validation, ProblemNamesEachProblem) {
+  Base b;
+  EXPECT_NO_THROW(b.problem.Validate());
+  auto with = [&](auto edit, const std::string& needle) {
+    Problem p = b.problem;
+    edit(p);
+    ExpectError([&] { p.Validate(); }, needle);
+  };
+  with([](Problem& p) { p.system = nullptr; }, "system is null");
+  with([](Problem& p) { p.cost = nullptr; }, "cost is null");
+  with([](Problem& p) { p.bounds.u_min = Vector(); }, "bounds.u_min is empty");
+  with([](Problem& p) { p.bounds.u_max = Vector::Ones(2); }, "bounds.u_max has size 2, expected 1");
+  with([](Problem& p) { p.bounds.duration_min = Vector::Ones(3); },
+       "bounds.duration_min has size 3, expected 2");
+  with([](Problem& p) { p.surface_weights = Vector::Zero(1); }, "surface_weights has size 1");
+  with([](Problem& p) { p.bounds.u_min(0) = 2; }, "reversed input bounds: u_min(0) = 2 > u_max(0)");
+  with([](Problem& p) { p.bounds.duration_min(1) = 2; }, "reversed duration bounds: duration_min(1)");
+  with([](Problem& p) { p.bounds.duration_min(0) = 0; }, "duration_min(0) = 0, expected > 0");
+  with([](Problem& p) { p.bounds.u_max(0) = kNaN; }, "bounds.u_max(0) = nan is not finite");
+  with([](Problem& p) { p.bounds.duration_max(1) = kInf; }, "duration_max(1) = inf is not finite");
+  with([](Problem& p) { p.surface_weights(0) = -1; }, "surface_weights(0) = -1");
+  with([](Problem& p) { p.surface_weights(1) = 1; }, "has no switching surface");
+}
+
+TEST(Validation, TrajectoryNamesEachProblem) {
+  Base b;
+  EXPECT_NO_THROW(b.Valid().Validate(b.sys));
+  auto with = [&](auto edit, const std::string& needle) {
+    Trajectory t = b.Valid();
+    edit(t);
+    ExpectError([&] { t.Validate(b.sys); }, needle);
+  };
+  with([](Trajectory& t) { t.modes.clear(); }, "empty mode sequence");
+  with([](Trajectory& t) { t.T = Vector::Ones(3); }, "T has size 3, expected K = 2");
+  with([](Trajectory& t) { t.modes[1].t.resize(1); t.modes[1].t(0) = 0.5; }, "mode 1: has 1 samples");
+  with([](Trajectory& t) { t.modes[0].x = Matrix::Zero(2, 2); }, "mode 0: t has 3 samples but x has 2");
+  with([](Trajectory& t) { t.modes[1].u = Matrix::Zero(2, 4); }, "mode 1: u has 2 rows, expected m = 1");
+  with([](Trajectory& t) { t.modes[0].t(1) = 0.6; }, "decreasing sample times");
+  with([](Trajectory& t) { t.modes[0].t(1) = kNaN; }, "t(1) is not finite");
+  with([](Trajectory& t) { t.modes[0].x(1, 2) = kInf; }, "mode 0: x(1, 2) = inf is not finite");
+  with([](Trajectory& t) { t.modes[1].u(0, 0) = kNaN; }, "mode 1: u(0, 0) = nan is not finite");
+  with([](Trajectory& t) { t.modes[0].t(0) = 0.1; }, "trials start at t = 0");
+  with([](Trajectory& t) { t.T(0) = 0.4; }, "last sample at t = 0.5, expected T(0) = 0.4");
+  with([](Trajectory& t) { t.x0 = Vector::Ones(2); }, "x0 differs");
+  with([](Trajectory& t) { t.x0 = Vector::Ones(3); }, "x0 has size 3");
+  with([](Trajectory& t) { t.modes[1].x = Matrix::Zero(2, 4); }, "mode 1: x has 2 rows, expected n_1 = 3");
+  // Zero-length mode.
+  with(
+      [](Trajectory& t) {
+        t.modes[1].t.setConstant(0.5);
+        t.T(1) = 0.5;
+      },
+      "zero or negative duration");
+}
+
+TEST(Validation, EngineObjectsRejectBadSettingsAndInputs) {
+  Base b;
+  // Learner settings.
+  auto settings_error = [&](auto edit, const std::string& needle) {
+    LearnerSettings s;
+    edit(s);
+    ExpectError([&] { Learner l(b.problem, s); }, needle);
+  };
+  settings_error([](LearnerSettings& s) { s.c = 0; }, "c must be > 0");
+  settings_error([](LearnerSettings& s) { s.gamma = 1; }, "gamma must be in (0, 1)");
+  settings_error([](LearnerSettings& s) { s.alpha_initial = 2; }, "alpha_initial");
+  settings_error([](LearnerSettings& s) { s.epsilon = -1; }, "epsilon");
+  settings_error([](LearnerSettings& s) { s.delta_i = 0; }, "delta_i");
+  // Problem validation reaches every engine object.
+  Problem broken = b.problem;
+  broken.bounds.u_min(0) = 5;
+  ExpectError([&] { Learner l(broken); }, "reversed input bounds");
+  ExpectError([&] { BackwardPass p; p.Allocate(broken, 10); }, "reversed input bounds");
+  ExpectError([&] { OnlineController c; c.Allocate(broken, 10); }, "reversed input bounds");
+  ExpectError([&] { ModelPlant m(broken); }, "reversed input bounds");
+  ExpectError([&] { EvaluateCost(broken, b.Valid()); }, "reversed input bounds");
+  // Cost of a mismatched trajectory.
+  Trajectory t = b.Valid();
+  t.modes[1].x = Matrix::Zero(2, 4);
+  ExpectError([&] { EvaluateCost(b.problem, t); }, "expected n_1 = 3");
+  // Switching-time update inputs.
+  ExpectError(
+      [&] {
+        SolveSwitchingTimeUpdate(b.problem, Vector::Ones(3), Matrix::Identity(2, 2),
+                                 Vector::Zero(2), 1.0);
+      },
+      "T has size 3");
+  ExpectError(
+      [&] {
+        SolveSwitchingTimeUpdate(b.problem, Eigen::Vector2d(0.5, 1.0), Matrix::Identity(2, 2),
+                                 Eigen::Vector2d(kNaN, 0), 1.0);
+      },
+      "non-finite");
+  // Learner initial trajectory with a non-finite state.
+  Learner learner(b.problem);
+  Trajectory nan_traj = b.Valid();
+  nan_traj.modes[0].x(0, 1) = kNaN;
+  ExpectError([&] { learner.Initialize(nan_traj); }, "is not finite");
+  // Controller loaded with an invalid alpha.
+  BackwardPass pass;
+  pass.Allocate(b.problem, 10);
+  pass.Run(b.Valid());
+  OnlineController ctrl;
+  ctrl.Allocate(b.problem, 10);
+  ExpectError([&] { ctrl.Load(b.Valid(), pass, -1.0, Vector::Zero(2)); }, "alpha = -1");
+  ExpectError([&] { ctrl.Load(b.Valid(), pass, 1.0, Eigen::Vector2d(-0.6, 0)); },
+              "planned duration of mode 0");
+}
+
+TEST(Validation, SwitchingTimeUpdateRegularizesAndRespectsDurationBounds) {
+  Base b;
+  // Indefinite P22: Levenberg-Marquardt makes the QP convex; the step is bounded by (7).
+  Matrix P22(2, 2);
+  P22 << -1, 0, 0, 2;
+  const Eigen::Vector2d T(0.5, 1.0), p2(1.0, -1.0);
+  const SwitchingTimeStep step = SolveSwitchingTimeUpdate(b.problem, T, P22, p2, 1.0);
+  EXPECT_GT(step.regularization, 0.0);
+  const double D0 = step.T_planned(0), D1 = step.T_planned(1) - step.T_planned(0);
+  EXPECT_GE(D0, 0.1 - 1e-12);
+  EXPECT_LE(D0, 1.0 + 1e-12);
+  EXPECT_GE(D1, 0.1 - 1e-12);
+  EXPECT_LE(D1, 1.0 + 1e-12);
+  // Positive definite P22 and an interior solution: the exact Newton step -alpha P22^{-1} p2.
+  Matrix H(2, 2);
+  H << 40, 5, 5, 30;
+  const SwitchingTimeStep newton = SolveSwitchingTimeUpdate(b.problem, T, H, p2, 0.5);
+  EXPECT_EQ(newton.regularization, 0.0);
+  EXPECT_LT((newton.dT - (-0.5 * H.llt().solve(Vector(p2)))).norm(), 1e-10);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
