@@ -41,6 +41,16 @@ void ControlCallback(const mjModel* m, mjData* d) {
 
 }  // namespace
 
+LearnerSettings HopperLearnerDefaults() {
+  LearnerSettings s;
+  s.c = 1e-7;
+  s.gamma = 0.5;
+  s.reset_alpha_on_accept = false;
+  s.controller.alpha_scales_feedback = false;
+  s.controller.regularization = 0.1;
+  return s;
+}
+
 HopperController::HopperController(const mjModel* m, const ControllerConfig& config)
     : config_(config),
       map_(HopperMapping::Build(m, "the robot's mjModel")),
@@ -126,13 +136,13 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
   reports_.clear();
   nonfinite_steps_ = 0;
   have_prev_td_ = false;
-  last_event_ = -1e9;
+  last_event_ = d->time;  // the reset state is a takeoff: the foot starts on the ground
   u_ = gait_.u0;
   learner_.reset();
   if (config_.method != Method::kOcfb) {
     learner_ = std::make_unique<Learner>(problem_, config_.learner);
   }
-  policy_ = &model_learner_->ConvergedPolicy();
+  policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
   policy_->BeginTrial();
 }
 
@@ -308,12 +318,12 @@ void HopperController::EndHop() {
   if (config_.method == Method::kOcfb) {
     r.accepted = true;
     r.learner_cost = EvaluateCost(problem_, trial_).total;
-    policy_ = &model_learner_->ConvergedPolicy();
+    policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
   } else if (hop_ == 0) {
     // Hop 0 ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
     if (config_.method == Method::kMrl) {
       Trajectory predicted;
-      model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(), &predicted);
+      model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);
       cost_.SetReference(trial_.x0);
       learner_->Initialize(trial_, &predicted);
     } else {

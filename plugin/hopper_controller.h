@@ -39,13 +39,27 @@ enum class Method {
   kMrl,   ///< direction from the model's prediction, line search on the measured cost
 };
 
+/// Algorithm 1 settings tuned for the hopper (see README "Learning on the hopper"):
+/// - c = 1e-7: (36) measures int |du|^2 in raw input units, where the stiffness commands span
+///   hundreds of N/m, so int |du|^2 is ~1e5 for a full step while the cost is ~1;
+/// - alpha multiplies the feed-forward only, so backtracking converges to tracking the nominal
+///   with feedback instead of replaying it open loop on an unstable robot;
+/// - regularization 0.1 of L_uu in (33): with R = 1e-2 diag(1, 1e-2, 1e-4, 1e-4) the raw
+///   feedback gain L_uu^-1 (L_uz + F_u^T P) is so large that the QP chatters between bounds and
+///   destabilizes the hop (measured on the model: see README);
+/// - after an accepted trial alpha grows by 1/gamma instead of restarting at 1.
+LearnerSettings HopperLearnerDefaults();
+
 /// Configuration of the controller. Plain struct; every field has a default.
 struct ControllerConfig {
   Method method = Method::kAlg1;
   HopperParams model;                 ///< the (possibly inexact) analytic model
   NominalGaitSettings gait;           ///< starting point of the model-based initial policy
-  LearnerSettings learner;            ///< Algorithm 1 on the robot
-  LearnerSettings model_learner;      ///< OC-FB solve on the model (initial policy)
+  LearnerSettings learner = HopperLearnerDefaults();        ///< Algorithm 1 on the robot
+  LearnerSettings model_learner = HopperLearnerDefaults();  ///< OC-FB on the model
+  /// alpha of the OC-FB law applied to the robot (Learner::ConvergedPolicy). With the
+  /// feed-forward-only alpha convention, 0 means "nominal inputs + feedback".
+  double ocfb_alpha = 0.0;
   double dt_model = 1e-3;             ///< RK4 step of the model plant, s
   double flight_min = 0.05, flight_max = 1.5;  ///< duration bounds of the flight mode, s
   double stance_min = 0.05, stance_max = 1.0;  ///< duration bounds of the stance mode, s

@@ -192,6 +192,19 @@ int Run(int argc, char** argv) {
   config.method = ToPluginMethod(s.method);
   config.model = params;
   config.gait.forward_speed = s.forward_speed;
+  const LearningOverrides& l = s.learning;
+  if (l.c) config.learner.c = *l.c;
+  if (l.gamma) config.learner.gamma = *l.gamma;
+  if (l.epsilon) config.learner.epsilon = *l.epsilon;
+  if (l.delta_i) config.learner.delta_i = *l.delta_i;
+  if (l.alpha_min) config.learner.alpha_min = *l.alpha_min;
+  if (l.max_duration_step) config.learner.switching.max_duration_step = *l.max_duration_step;
+  if (l.alpha_scales_feedback) config.learner.controller.alpha_scales_feedback = *l.alpha_scales_feedback;
+  if (l.regularization) {
+    config.learner.controller.regularization = *l.regularization;
+    config.model_learner.controller.regularization = *l.regularization;
+  }
+  if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();
   std::unique_ptr<plugin::HopperController> controller =

@@ -123,11 +123,37 @@ Scenario LoadScenario(const std::string& path) {
       p.force = RequiredDouble(path, e, "force");
       p.duration = RequiredDouble(path, e, "duration");
       s.pushes.push_back(p);
+    } else if (tag == "learning") {
+      LearningOverrides& l = s.learning;
+      l.c = OptionalDouble(path, e, "c");
+      l.gamma = OptionalDouble(path, e, "gamma");
+      l.epsilon = OptionalDouble(path, e, "epsilon");
+      l.alpha_min = OptionalDouble(path, e, "alpha_min");
+      l.max_duration_step = OptionalDouble(path, e, "max_duration_step");
+      l.regularization = OptionalDouble(path, e, "regularization");
+      if (const char* a = e->Attribute("alpha_scales")) {
+        const std::string v = a;
+        if (v != "all" && v != "feedforward") {
+          Fail(path, line, "<learning> alpha_scales=\"" + v + "\" (expected all or feedforward)");
+        }
+        l.alpha_scales_feedback = v == "all";
+      }
+      if (const char* a = e->Attribute("alpha_after_accept")) {
+        const std::string v = a;
+        if (v != "reset" && v != "grow") {
+          Fail(path, line, "<learning> alpha_after_accept=\"" + v + "\" (expected reset or grow)");
+        }
+        l.reset_alpha_on_accept = v == "reset";
+      }
+      if (auto di = OptionalDouble(path, e, "delta_i")) {
+        if (*di != std::floor(*di) || *di < 1) Fail(path, line, "<learning> delta_i must be an integer >= 1");
+        l.delta_i = static_cast<int>(*di);
+      }
     } else if (tag == "gait") {
       s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
     } else {
       Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
-                       "duration, push or gait)");
+                       "duration, push, learning or gait)");
     }
   }
   std::sort(s.pushes.begin(), s.pushes.end(),
@@ -149,15 +175,22 @@ void ValidateScenario(const Scenario& s) {
   if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) Fail(f, 0, "seconds must be >= 0");
   if (s.hops == 0 && s.seconds == 0.0) Fail(f, 0, "give a number of hops or of seconds");
   auto positive = [&](const std::optional<double>& v, const char* name) {
-    if (v && !(*v > 0.0)) Fail(f, 0, std::string("model ") + name + " must be > 0");
+    if (v && !(*v > 0.0)) Fail(f, 0, std::string(name) + " must be > 0");
   };
-  positive(s.model_numbers.mass, "M");
-  positive(s.model_numbers.j_body, "J_body");
-  positive(s.model_numbers.j_leg, "J_leg");
-  positive(s.model_numbers.r0, "r0");
-  positive(s.model_numbers.beta, "beta");
-  positive(s.model_numbers.gravity, "g");
+  positive(s.model_numbers.mass, "model M");
+  positive(s.model_numbers.j_body, "model J_body");
+  positive(s.model_numbers.j_leg, "model J_leg");
+  positive(s.model_numbers.r0, "model r0");
+  positive(s.model_numbers.beta, "model beta");
+  positive(s.model_numbers.gravity, "model g");
   if (s.model_numbers.drag && *s.model_numbers.drag < 0.0) Fail(f, 0, "model c_d must be >= 0");
+  const LearningOverrides& l = s.learning;
+  positive(l.c, "learning c");
+  positive(l.epsilon, "learning epsilon");
+  positive(l.alpha_min, "learning alpha_min");
+  positive(l.max_duration_step, "learning max_duration_step");
+  if (l.regularization && *l.regularization < 0.0) Fail(f, 0, "learning regularization must be >= 0");
+  if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) Fail(f, 0, "learning gamma must be in (0, 1)");
   for (const Push& p : s.pushes) {
     if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
     if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");

@@ -44,6 +44,19 @@ struct ModelNumbers {
   std::optional<double> gravity;  // g [m/s^2]
 };
 
+/// Algorithm 1 settings a scenario may override (LearnerSettings; unset = the plugin default).
+struct LearningOverrides {
+  std::optional<double> c;                  // sufficient-decrease constant of (36)
+  std::optional<double> gamma;              // backtracking factor
+  std::optional<double> epsilon;            // convergence threshold on int|du|^2 + |dT|^2
+  std::optional<int> delta_i;               // convergence window (accepted iterations)
+  std::optional<double> alpha_min;          // line search gives up below this alpha
+  std::optional<double> max_duration_step;  // cap on |dD_k| of (31), s
+  std::optional<double> regularization;     // mu of (33): L_uu + mu (1 + max|diag L_uu|) I
+  std::optional<bool> alpha_scales_feedback;  // alpha_scales="all" (paper) | "feedforward"
+  std::optional<bool> reset_alpha_on_accept;  // alpha_after_accept="reset" (paper) | "grow"
+};
+
 /// Everything one run needs. Paths are absolute or relative to the current directory
 /// (relative paths in the file are resolved against the scenario file's folder).
 struct Scenario {
@@ -56,7 +69,8 @@ struct Scenario {
   int hops = 100;                    // stop after this many hops (0 = use seconds)
   double seconds = 0.0;              // stop after this simulated time (0 = use hops)
   std::vector<Push> pushes;          // in time order
-  double forward_speed = 0.0;        // desired mean forward speed of the nominal gait [m/s]
+  double forward_speed = 0.0;        // forward speed of the nominal gait [m/s]
+  LearningOverrides learning;        // <learning .../>
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.
