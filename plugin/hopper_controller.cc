@@ -177,7 +177,7 @@ void HopperController::Compute(const mjModel* m, mjData* d) {
   }
   in_compute_ = true;
   try {
-    if (!failed_ && (!started_ || d->time > last_time_)) {
+    if (!failed_ && !hold_ && (!started_ || d->time > last_time_)) {
       NewStep(m, d);
     }
     WriteHeld(m, d);

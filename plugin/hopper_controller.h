@@ -114,6 +114,13 @@ class HopperController {
   /// Never throws; never writes a non-finite or out-of-bounds input.
   void Compute(const mjModel* m, mjData* d);
 
+  /// While held, Compute only rewrites the held input for the current state: no VSA advance,
+  /// no phase change, no learning. Use it around code that calls mj_step/mj_forward on the
+  /// robot's mjData for other purposes, notably mjd_transitionFD, which in MuJoCo 2.2 advances
+  /// d->time on every internal step (so those calls look like real steps). See HoldScope.
+  void set_hold(bool hold) { hold_ = hold; }
+  bool hold() const { return hold_; }
+
   /// Reports of completed hops since the last call (moves them out).
   std::vector<HopReport> TakeReports();
 
@@ -171,6 +178,7 @@ class HopperController {
   int hop_ = 0;
   bool started_ = false;        // first step after Reset seen
   bool in_compute_ = false;     // re-entry guard
+  bool hold_ = false;           // set_hold()
   double last_time_ = 0.0;      // simulated time of the last new step
   double phase_start_ = 0.0;    // absolute time the current mode started
   double hop_start_ = 0.0;      // absolute time the hop started (trial t = 0)
@@ -192,6 +200,19 @@ class HopperController {
   std::string error_;
   long nonfinite_steps_ = 0;
   int hop_nonfinite_ = 0;
+};
+
+/// Holds a controller for the scope's lifetime (see HopperController::set_hold).
+class HoldScope {
+ public:
+  explicit HoldScope(HopperController* c) : c_(c), was_(c->hold()) { c_->set_hold(true); }
+  ~HoldScope() { c_->set_hold(was_); }
+  HoldScope(const HoldScope&) = delete;
+  HoldScope& operator=(const HoldScope&) = delete;
+
+ private:
+  HopperController* c_;
+  bool was_;
 };
 
 /// Attaches `controller` to MuJoCo's global mjcb_control (one controller per process; MuJoCo

@@ -1,0 +1,272 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The controller plugin on the MuJoCo hopper: creation errors, contact-phase switching, the state
+// mapping it records, re-entry (mj_forward, finite differencing), bounds under bad states, and a
+// short learning run.
+#include "hopper_controller.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ddoc/mujoco/hopper_sim.h"
+
+namespace ddoc::plugin {
+namespace {
+
+std::string ModelPath(const std::string& name) { return std::string(DDOC_MODELS_DIR) + "/" + name; }
+
+// Owns the robot (mjModel/mjData) and a controller attached through mjcb_control.
+class Rig {
+ public:
+  explicit Rig(const std::string& mjcf, ControllerConfig config = {}) {
+    model_ = LoadMjcf(ModelPath(mjcf));
+    data_.reset(mj_makeData(model_.get()));
+    config.gait.forward_speed = 0.5;
+    config.model = LoadHopperParamsFromMjcf(ModelPath(mjcf));
+    std::string error;
+    controller_ = HopperController::Create(model_.get(), config, &error);
+    EXPECT_TRUE(controller_) << error;
+    if (controller_) {
+      controller_->Reset(model_.get(), data_.get());
+      Attach(controller_.get());
+    }
+  }
+  ~Rig() { Detach(); }
+
+  // One physics step with the robot's drag; returns the foot-floor normal force after it.
+  double Step() {
+    ApplyDragAndPush(controller_->mapping(), model_.get(), data_.get(), 0.0);
+    mj_step(model_.get(), data_.get());
+    return FootNormalForce(controller_->mapping(), model_.get(), data_.get());
+  }
+
+  const mjModel* m() const { return model_.get(); }
+  mjData* d() { return data_.get(); }
+  HopperController& c() { return *controller_; }
+  bool ok() const { return controller_ != nullptr; }
+
+ private:
+  MjModelPtr model_;
+  MjDataPtr data_;
+  std::unique_ptr<HopperController> controller_;
+};
+
+void ExpectInputInBounds(const HopperController& c) {
+  for (int i = 0; i < 4; ++i) {
+    const double u = c.last_input()[i];
+    ASSERT_TRUE(std::isfinite(u)) << "u[" << i << "] is not finite";
+    EXPECT_GE(u, c.u_min()(i)) << "u[" << i << "]";
+    EXPECT_LE(u, c.u_max()(i)) << "u[" << i << "]";
+  }
+}
+
+TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
+  MjModelPtr model = LoadMjcf(ModelPath("hopper.xml"));
+  std::string error;
+  EXPECT_EQ(HopperController::Create(nullptr, {}, &error), nullptr);
+  EXPECT_NE(error.find("mjModel is null"), std::string::npos) << error;
+
+  ControllerConfig reversed;
+  reversed.flight_min = 2.0;  // > flight_max = 1.5
+  EXPECT_EQ(HopperController::Create(model.get(), reversed, &error), nullptr);
+  EXPECT_NE(error.find("duration"), std::string::npos) << error;
+
+  ControllerConfig bad_model;
+  bad_model.model.M = -1.0;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_model, &error), nullptr);
+  EXPECT_NE(error.find("M"), std::string::npos) << error;
+
+  // A model that is not the hopper: the mapping names the missing element.
+  const std::string path = ::testing::TempDir() + "ddoc_not_a_hopper.xml";
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("<mujoco><worldbody><body name='b'><freejoint/><geom size='0.1'/></body>"
+             "</worldbody></mujoco>", f);
+  std::fclose(f);
+  char err[256] = "";
+  mjModel* box = mj_loadXML(path.c_str(), nullptr, err, sizeof(err));
+  ASSERT_NE(box, nullptr) << err;
+  EXPECT_EQ(HopperController::Create(box, {}, &error), nullptr);
+  EXPECT_NE(error.find("torso"), std::string::npos) << error;
+  mj_deleteModel(box);
+}
+
+TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
+  Rig rig("hopper.xml");
+  ASSERT_TRUE(rig.ok());
+  HopperController& c = rig.c();
+  const double dt = rig.m()->opt.timestep;
+  // The hop starts at the nominal gait's takeoff state.
+  const Eigen::Matrix<double, 14, 1> x_start = FlightState(c.mapping(), rig.d(), c.vsa());
+  EXPECT_TRUE(x_start.isApprox(c.gait().x0, 1e-12));
+
+  // Touchdown: the plugin switches at the step whose collision pass first has the foot contact,
+  // i.e. one step before MuJoCo reports a normal force. Takeoff: after the force vanished.
+  int mode = c.mode();
+  double first_force_time = -1, touchdown_time = -1, force_gone_time = -1, takeoff_time = -1;
+  double prev_force = 0;
+  while (c.hop() < 1 && rig.d()->time < 2.0) {
+    const double t_before = rig.d()->time;
+    const double force = rig.Step();
+    if (t_before < 0.05) continue;  // the start state is a takeoff with the foot on the floor
+    if (first_force_time < 0 && force > 0) first_force_time = t_before;
+    if (first_force_time >= 0 && force_gone_time < 0 && prev_force > 0 && force <= 0) {
+      force_gone_time = t_before;
+    }
+    prev_force = force;
+    if (c.mode() != mode) {
+      (c.mode() == hopper::kStance ? touchdown_time : takeoff_time) = t_before;
+      mode = c.mode();
+    }
+  }
+  ASSERT_GE(touchdown_time, 0.0) << "no touchdown within 2 s";
+  ASSERT_GE(takeoff_time, 0.0) << "no takeoff within 2 s";
+  EXPECT_NEAR(touchdown_time, first_force_time, 1.5 * dt);
+  EXPECT_GE(takeoff_time, force_gone_time - 0.5 * dt);
+  EXPECT_LE(takeoff_time, force_gone_time + 2.5 * dt);
+
+  const std::vector<HopReport> reports = c.TakeReports();
+  ASSERT_EQ(reports.size(), 1u);
+  const HopReport& r = reports[0];
+  EXPECT_NEAR(r.t_touchdown, touchdown_time, 1e-9);
+  EXPECT_GT(r.t1, 0.1);
+  EXPECT_GT(r.t2, r.t1 + 0.1);
+  EXPECT_LT(std::abs(r.foot_height_td), 3e-3);  // touchdown at the floor: I4 ~ 0
+  EXPECT_GT(r.apex, 0.7);
+
+  // The first trial seen by the learner starts at the mapped state of the robot.
+  ASSERT_NE(c.learner(), nullptr);
+  const Trajectory& nominal = c.learner()->nominal();
+  ASSERT_EQ(nominal.num_modes(), 2);
+  EXPECT_TRUE(nominal.x0.isApprox(Eigen::VectorXd(x_start), 1e-12));
+  EXPECT_EQ(nominal.modes[0].x.rows(), hopper::kFlightDim);
+  EXPECT_EQ(nominal.modes[1].x.rows(), hopper::kStanceDim);
+  EXPECT_NEAR(nominal.T(0), r.t1, 1e-9);
+  EXPECT_NEAR(nominal.T(1), r.t2, 1e-9);
+}
+
+TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
+  Rig rig("hopper.xml");
+  ASSERT_TRUE(rig.ok());
+  HopperController& c = rig.c();
+  for (int i = 0; i < 50; ++i) rig.Step();
+  // The first call at a new time is the step (here an mj_forward, as a viewer would do)...
+  mj_forward(rig.m(), rig.d());
+  const VsaState vsa = c.vsa();
+  const double u[4] = {c.last_input()[0], c.last_input()[1], c.last_input()[2], c.last_input()[3]};
+  const double ctrl0 = rig.d()->ctrl[0], ctrl1 = rig.d()->ctrl[1];
+  const int hop = c.hop(), mode = c.mode();
+  // ... and every further call at the same time, including the mj_step that follows, only
+  // rewrites the held input.
+  for (int i = 0; i < 3; ++i) mj_forward(rig.m(), rig.d());
+  EXPECT_EQ(c.vsa().k_hip, vsa.k_hip);
+  EXPECT_EQ(c.vsa().kd_leg, vsa.kd_leg);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(c.last_input()[i], u[i]);
+  EXPECT_EQ(rig.d()->ctrl[0], ctrl0);
+  EXPECT_EQ(rig.d()->ctrl[1], ctrl1);
+  EXPECT_EQ(c.hop(), hop);
+  EXPECT_EQ(c.mode(), mode);
+  // A nested call (Compute inside Compute) is held as well: simulate it through the hold flag
+  // that Compute raises, by holding explicitly.
+  {
+    HoldScope hold(&c);
+    rig.d()->time += rig.m()->opt.timestep;
+    mj_forward(rig.m(), rig.d());
+    rig.d()->time -= rig.m()->opt.timestep;
+  }
+  EXPECT_EQ(c.vsa().k_hip, vsa.k_hip);
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(c.last_input()[i], u[i]);
+}
+
+TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
+  // A measured fact of MuJoCo 2.2.2 that shapes the plugin: mjd_transitionFD steps the model
+  // and does not restore d->time, so a callback cannot tell its calls from real steps by time.
+  // Hence HoldScope. If this test fails, MuJoCo changed and the README note can go.
+  MjModelPtr model = LoadMjcf(ModelPath("hopper.xml"));
+  MjDataPtr data(mj_makeData(model.get()));
+  data->qpos[1] = 0.9;
+  mj_forward(model.get(), data.get());
+  const int n = 2 * model->nv + model->na;
+  std::vector<mjtNum> A(n * n), B(n * model->nu);
+  mjd_transitionFD(model.get(), data.get(), 1e-6, 0, A.data(), B.data(), nullptr, nullptr);
+  EXPECT_GT(data->time, 5 * model->opt.timestep);
+}
+
+TEST(HopperControllerTest, BadStatesNeverGiveNaNOrOutOfBoundsControls) {
+  Rig rig("hopper.xml");
+  ASSERT_TRUE(rig.ok());
+  HopperController& c = rig.c();
+  for (int i = 0; i < 20; ++i) rig.Step();
+  const HopperMapping& map = c.mapping();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  struct Case {
+    const char* what;
+    int qpos;
+    int dof;
+    double value;
+  };
+  const Case cases[] = {
+      {"NaN pitch", map.qpos_pitch, -1, nan},   {"NaN leg rate", -1, map.dof_leg, nan},
+      {"inf height", map.qpos_z, -1, inf},      {"absurd leg angle", map.qpos_hip, -1, 1e3},
+      {"absurd speed", -1, map.dof_x, 1e6},     {"absurd leg length", map.qpos_leg, -1, -50.0},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.what);
+    const mjtNum saved_q = k.qpos >= 0 ? rig.d()->qpos[k.qpos] : 0;
+    const mjtNum saved_v = k.dof >= 0 ? rig.d()->qvel[k.dof] : 0;
+    if (k.qpos >= 0) rig.d()->qpos[k.qpos] = k.value;
+    if (k.dof >= 0) rig.d()->qvel[k.dof] = k.value;
+    rig.d()->time += rig.m()->opt.timestep;  // a new step for the controller
+    c.Compute(rig.m(), rig.d());
+    ExpectInputInBounds(c);
+    EXPECT_TRUE(std::isfinite(rig.d()->ctrl[map.act_hip]));
+    EXPECT_TRUE(std::isfinite(rig.d()->ctrl[map.act_leg]));
+    if (k.qpos >= 0) rig.d()->qpos[k.qpos] = saved_q;
+    if (k.dof >= 0) rig.d()->qvel[k.dof] = saved_v;
+  }
+  EXPECT_GE(c.nonfinite_steps(), 2);
+  EXPECT_FALSE(c.failed()) << c.error();
+}
+
+TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
+  Rig rig("hopper_m12.xml");
+  ASSERT_TRUE(rig.ok());
+  while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
+    rig.Step();
+    ExpectInputInBounds(rig.c());
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  EXPECT_EQ(rig.c().hop(), 3);
+}
+
+TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
+  // Algorithm 1 with the exact model for a few hops: the learner must accept at least one trial,
+  // and the nominal cost it keeps must drop below the cost of the initial hop (u^0, T^0).
+  Rig rig("hopper.xml");
+  ASSERT_TRUE(rig.ok());
+  std::vector<HopReport> reports;
+  double initial = std::numeric_limits<double>::quiet_NaN();
+  while (rig.c().hop() < 8 && rig.d()->time < 8.0) {
+    rig.Step();
+    for (const HopReport& r : rig.c().TakeReports()) {
+      if (r.hop == 0) initial = rig.c().learner()->nominal_cost();
+      reports.push_back(r);
+    }
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  ASSERT_EQ(reports.size(), 8u);
+  int accepted = 0;
+  for (size_t i = 1; i < reports.size(); ++i) accepted += reports[i].accepted ? 1 : 0;
+  EXPECT_GE(accepted, 1);
+  EXPECT_LT(rig.c().learner()->nominal_cost(), initial);
+}
+
+}  // namespace
+}  // namespace ddoc::plugin
