@@ -7,7 +7,7 @@
 //                       state (before touchdown / after takeoff) and the stance state (after
 //                       touchdown / before takeoff)
 // Example:
-//   ddoc-drop --model models/hopper.xml --state "0,1,0.1,0,0.7,60,2000,0.5,0,0,0,0,0,0" \
+//   ddoc-drop --model models/hopper.xml --state "0,1,0.1,0,0.7,60,2000,0.5,0,0,0,0,0,0"
 //             --u "0,0,60,2000" --duration 2 --out out/drop
 //   ddoc-drop --model models/hopper.xml --nominal 0.5 --duration 2 --out out/nominal
 #include <cstdio>
