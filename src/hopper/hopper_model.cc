@@ -187,4 +187,17 @@ void HopperModel::DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef 
   hx(0, hopper::kTheta) = x(hopper::kR) * std::sin(x(hopper::kTheta));
 }
 
+// Explicit double instantiations, so the templated right-hand sides are usable outside src/hopper.
+template void HopperModel::FlightRhs<double>(const Eigen::Matrix<double, 14, 1>&,
+                                             const Eigen::Matrix<double, 4, 1>&,
+                                             Eigen::Matrix<double, 14, 1>*) const;
+template void HopperModel::StanceRhs<double>(const Eigen::Matrix<double, 10, 1>&,
+                                             const Eigen::Matrix<double, 4, 1>&,
+                                             Eigen::Matrix<double, 10, 1>*) const;
+template void HopperModel::TouchdownReset<double>(const Eigen::Matrix<double, 14, 1>&,
+                                                  Eigen::Matrix<double, 10, 1>*) const;
+template void HopperModel::TakeoffReset<double>(const Eigen::Matrix<double, 10, 1>&,
+                                                const double&, Eigen::Matrix<double, 14, 1>*) const;
+template double HopperModel::EnergyLoss<double>(const Eigen::Matrix<double, 14, 1>&) const;
+
 }  // namespace ddoc

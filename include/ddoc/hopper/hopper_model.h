@@ -114,6 +114,8 @@ class HopperModel : public SwitchedSystem {
   static double FootHeight(const ConstVectorRef& x_flight);
 
   /// Templated right-hand sides shared by the double and AutoDiff paths. Sizes: x 14 / 10, u 4.
+  /// Defined in src/hopper; instantiated for double (usable anywhere) and for the AutoDiff types
+  /// used inside src/hopper.
   template <typename T>
   void FlightRhs(const Eigen::Matrix<T, 14, 1>& x, const Eigen::Matrix<T, 4, 1>& u,
                  Eigen::Matrix<T, 14, 1>* xdot) const;

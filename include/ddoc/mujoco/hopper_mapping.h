@@ -106,7 +106,8 @@ HopperActuation WriteActuation(const HopperMapping& map, const mjModel* m, mjDat
                                const VsaState& vsa, const double* u);
 
 /// Air drag F = -c_d (xd|xd|, 0, yd|yd|) on the torso COM (per component, eq. (38)) plus a
-/// horizontal push force_x, written (not added) into d->xfrc_applied of the torso.
+/// horizontal push force_x, written (not added) into d->xfrc_applied of the torso. Usable inside
+/// mjcb_control (MuJoCo reads xfrc_applied after the control callback).
 void ApplyDragAndPush(const HopperMapping& map, const mjModel* m, mjData* d, double push_x);
 
 /// Sum of the normal forces of all foot-floor contacts (N, >= 0). Valid after mj_step or
