@@ -46,9 +46,10 @@ struct RenderSettings {
   /// Shadow pass. Off by default: on llvmpipe it costs ~10 ms per 640x480 frame
   /// (measured: render 8 ms without, 18-20 ms with shadows).
   bool shadows = false;
-  /// Mirror reflections on materials with reflectance > 0 (the scene is drawn twice
-  /// where a reflective floor is visible; measured < 1 ms per 640x480 hopper frame).
-  bool reflection = true;
+  /// Mirror reflections on materials with reflectance > 0. Off by default: the hopper's
+  /// floor has reflectance 0.1, and drawing the mirrored scene took a 640x480 hopper frame
+  /// from 8.7 to 15.5 ms (measured, llvmpipe).
+  bool reflection = false;
   /// Multisample anti-aliasing samples of MuJoCo's offscreen buffer (0 = off), in [0, 16].
   /// Off by default: with llvmpipe, 4 samples doubled the time of a 640x480 hopper frame
   /// (measured 11 -> 24 ms wall, 16 -> 40 ms CPU). Set 4 for smoother edges.
