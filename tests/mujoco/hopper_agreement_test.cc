@@ -212,30 +212,33 @@ TEST(HopperAgreementTest, TouchdownVelocityJumpWithin5PercentAndJlegNotJbody) {
 }
 
 TEST(HopperAgreementTest, NominalHopAgrees) {
-  const std::string path = ModelPath("hopper.xml");
-  const HopperParams p = LoadHopperParamsFromMjcf(path);
-  NominalGaitSettings gs;
-  gs.forward_speed = 1.0;
-  const NominalGait g = FindNominalGait(p, gs);
-  HopperSim sim(path);
-  sim.SetFlightState(g.x0);
-  while (sim.events().size() < 2 && sim.time() < 1.5) sim.Step(g.u0);
-  ASSERT_EQ(sim.events().size(), 2u);
-  const ContactEvent& td = sim.events()[0];
-  const ContactEvent& to = sim.events()[1];
-  EXPECT_EQ(td.type, ContactEvent::Type::kTouchdown);
-  EXPECT_EQ(to.type, ContactEvent::Type::kTakeoff);
-  const V14 d = to.flight - g.hop.x_to_plus;
-  std::printf("[agreement] nominal hop (1 m/s): T1 %.4f vs %.4f s, T2 %.4f vs %.4f s; at takeoff "
-              "|dx| %.3g |dy| %.3g |dtheta| %.3g |dphi| %.3g |dxd| %.3g |dyd| %.3g\n",
-              td.time, g.T0(0), to.time, g.T0(1), std::abs(d(0)), std::abs(d(1)), std::abs(d(2)),
-              std::abs(d(3)), std::abs(d(7)), std::abs(d(8)));
-  EXPECT_NEAR(td.time, g.T0(0), 2e-3);
-  EXPECT_NEAR(to.time, g.T0(1), 3e-3);
-  EXPECT_LT(std::abs(d(2)), 5e-3);
-  EXPECT_LT(std::abs(d(3)), 5e-3);
-  EXPECT_LT(std::abs(d(7)), 0.05);
-  EXPECT_LT(std::abs(d(8)), 0.05);
+  for (const char* file : {"hopper.xml", "hopper_m12.xml", "hopper_m8.xml"}) {
+    SCOPED_TRACE(file);
+    const std::string path = ModelPath(file);
+    const HopperParams p = LoadHopperParamsFromMjcf(path);
+    NominalGaitSettings gs;
+    gs.forward_speed = 1.0;
+    const NominalGait g = FindNominalGait(p, gs);
+    HopperSim sim(path);
+    sim.SetFlightState(g.x0);
+    while (sim.events().size() < 2 && sim.time() < 1.5) sim.Step(g.u0);
+    ASSERT_EQ(sim.events().size(), 2u);
+    const ContactEvent& td = sim.events()[0];
+    const ContactEvent& to = sim.events()[1];
+    EXPECT_EQ(td.type, ContactEvent::Type::kTouchdown);
+    EXPECT_EQ(to.type, ContactEvent::Type::kTakeoff);
+    const V14 d = to.flight - g.hop.x_to_plus;
+    std::printf("[agreement] nominal hop (1 m/s, %s): T1 %.4f vs %.4f s, T2 %.4f vs %.4f s; at "
+                "takeoff |dx| %.3g |dy| %.3g |dtheta| %.3g |dphi| %.3g |dxd| %.3g |dyd| %.3g\n",
+                file, td.time, g.T0(0), to.time, g.T0(1), std::abs(d(0)), std::abs(d(1)), std::abs(d(2)),
+                std::abs(d(3)), std::abs(d(7)), std::abs(d(8)));
+    EXPECT_NEAR(td.time, g.T0(0), 2e-3);
+    EXPECT_NEAR(to.time, g.T0(1), 3e-3);
+    EXPECT_LT(std::abs(d(2)), 5e-3);
+    EXPECT_LT(std::abs(d(3)), 5e-3);
+    EXPECT_LT(std::abs(d(7)), 0.05);
+    EXPECT_LT(std::abs(d(8)), 0.05);
+  }
 }
 
 TEST(HopperAgreementTest, DragSlowsAThrownBodyAsPredicted) {
