@@ -230,7 +230,8 @@ TEST(HopperAgreementTest, NominalHopAgrees) {
     const V14 d = to.flight - g.hop.x_to_plus;
     std::printf("[agreement] nominal hop (1 m/s, %s): T1 %.4f vs %.4f s, T2 %.4f vs %.4f s; at "
                 "takeoff |dx| %.3g |dy| %.3g |dtheta| %.3g |dphi| %.3g |dxd| %.3g |dyd| %.3g\n",
-                file, td.time, g.T0(0), to.time, g.T0(1), std::abs(d(0)), std::abs(d(1)), std::abs(d(2)),
+                file, td.time, g.T0(0), to.time, g.T0(1), std::abs(d(0)), std::abs(d(1)),
+                std::abs(d(2)),
                 std::abs(d(3)), std::abs(d(7)), std::abs(d(8)));
     EXPECT_NEAR(td.time, g.T0(0), 2e-3);
     EXPECT_NEAR(to.time, g.T0(1), 3e-3);
