@@ -264,6 +264,27 @@ void OffscreenRenderer::AddGridLines(const mjModel* m) {
   }
 }
 
+void OffscreenRenderer::AddSunLight() {
+  // Directional light: direction (0, 0.35, -1)/|.| points down and away from a camera at
+  // azimuth 90 deg; no attenuation, no shadow. Moderate intensity, so that the model's own
+  // lights still show where they shine.
+  mjvLight& light = scene_.lights[scene_.nlight++];
+  std::memset(&light, 0, sizeof(light));
+  const float norm = std::sqrt(0.35f * 0.35f + 1.0f);
+  light.pos[2] = 10;
+  light.dir[1] = 0.35f / norm;
+  light.dir[2] = -1.0f / norm;
+  light.attenuation[0] = 1;
+  light.cutoff = 180;
+  light.directional = 1;
+  light.castshadow = 0;
+  for (int i = 0; i < 3; ++i) {
+    light.ambient[i] = 0.1f;
+    light.diffuse[i] = 0.35f;
+    light.specular[i] = 0.1f;
+  }
+}
+
 void OffscreenRenderer::Render(const mjModel* m, mjData* d, const std::string& overlay_left,
                                const std::string& overlay_right,
                                std::vector<unsigned char>* rgb) {
@@ -281,6 +302,7 @@ void OffscreenRenderer::Render(const mjModel* m, mjData* d, const std::string& o
   mjv_updateCamera(m, d, &camera_, &scene_);
   mjv_updateScene(m, d, &option_, nullptr, &camera_, mjCAT_ALL, &scene_);
   if (grid_plane_geom_ >= 0) AddGridLines(m);
+  if (settings_.sun_light && scene_.nlight < mjMAXLIGHT) AddSunLight();
 
   const mjrRect viewport = {0, 0, width_, height_};
   mjr_setBuffer(mjFB_OFFSCREEN, &context_);

@@ -207,6 +207,37 @@ TEST_F(OffscreenRendererTest, PlainFloorGetsGridLinesThatScrollWithTheCamera) {
   EXPECT_GT(floor_diff(a, c), 100);
 }
 
+TEST_F(OffscreenRendererTest, SunLightKeepsTheFloorLitFarFromTheModelsLight) {
+  // The test model's only light is a spotlight above the origin.
+  auto m = testing::LoadModel(testing::TestModelXml(true));
+  auto d = testing::MakeData(m.get());
+  auto floor_brightness = [&](bool sun, double x) {
+    RenderSettings s;
+    s.width = kWidth;
+    s.height = kHeight;
+    s.sun_light = sun;
+    std::string error;
+    auto r = OffscreenRenderer::Create(m.get(), s, &error);
+    EXPECT_NE(r, nullptr) << error;
+    SetX(m.get(), d.get(), x);
+    std::vector<unsigned char> rgb;
+    r->Render(m.get(), d.get(), "", "", &rgb);
+    double sum = 0;  // mean grey level of the bottom quarter (floor only)
+    for (int y = 3 * kHeight / 4; y < kHeight; ++y) {
+      for (int x = 0; x < kWidth; ++x) {
+        const unsigned char* p = Pixel(rgb, kWidth, x, y);
+        sum += (p[0] + p[1] + p[2]) / 3.0;
+      }
+    }
+    return sum / (kWidth * kHeight / 4);
+  };
+  const double near_sun = floor_brightness(true, 0.0);
+  const double far_sun = floor_brightness(true, 40.0);
+  const double far_dark = floor_brightness(false, 40.0);
+  EXPECT_GT(far_sun, far_dark + 20) << "the sun must light the floor 40 m from the spotlight";
+  EXPECT_GT(far_sun, 0.5 * near_sun) << "near " << near_sun << ", far " << far_sun;
+}
+
 TEST_F(OffscreenRendererTest, OverlayTextIsDrawnTopLeft) {
   auto m = testing::LoadModel(testing::TestModelXml(true));
   auto d = testing::MakeData(m.get());

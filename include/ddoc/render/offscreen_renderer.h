@@ -77,6 +77,7 @@ class OffscreenRenderer {
   OffscreenRenderer() = default;
   void MakeCurrent();
   void AddGridLines(const mjModel* m);
+  void AddSunLight();
 
   RenderSettings settings_;
   std::unique_ptr<GlState> gl_;

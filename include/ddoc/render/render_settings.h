@@ -43,6 +43,10 @@ struct RenderSettings {
   /// Camera elevation in degrees; negative looks down.
   double camera_elevation = -12;
 
+  /// Adds a directional "sun" (from above, slightly from the camera side) to the model's
+  /// lights, so that the floor stays evenly lit wherever the robot goes: a light fixed in
+  /// the world (like the hopper MJCF's spotlight at x = 0) leaves the floor dark ~10 m away.
+  bool sun_light = true;
   /// Shadow pass. Off by default: on llvmpipe it costs ~10 ms per 640x480 frame
   /// (measured: render 8 ms without, 18-20 ms with shadows).
   bool shadows = false;
