@@ -7,6 +7,7 @@
 
 #include <string>
 
+#include <Eigen/Dense>  // before the unsupported module, which needs Eigen/Core
 #include <unsupported/Eigen/AutoDiff>
 
 #include "ddoc/switched_system.h"

@@ -20,9 +20,37 @@ enum class BackwardIntegrator {
   kMidpoint  ///< explicit midpoint (RK2), 2 products per interval, local error O(h^3)
 };
 
+/// Which equation P and p follow.
+enum class BackwardEquation {
+  /// The paper's (30): Lyapunov-type, no quadratic term; p is the adjoint (plus du_prev).
+  kLyapunov,
+  /// Extension (not the paper): P gets the Riccati term of the closed-loop cost-to-go,
+  ///   dP/dtau = -(P F_z + F_z^T P + L_zz - (P F_u + L_zu) H^{-1} (F_u^T P + L_uz)),
+  /// H = L_uu + mu I, so the feedback H^{-1}(L_uz + F_u^T P) of (33) is the (unconstrained)
+  /// LQR gain of the linearization; p stays the gradient adjoint of (30) (feed-forward =
+  /// preconditioned gradient step).
+  kRiccatiFeedback,
+  /// Extension (not the paper): the Riccati equations of the unconstrained LQ sub-problem (21),
+  /// i.e. (30) with the feedback of (33) substituted into the co-state equation:
+  ///   P as kRiccatiFeedback,
+  ///   dp/dtau = -(F_z^T p + L_z - (P F_u + L_zu) H^{-1} (L_u + F_u^T p)).
+  /// Then (33) with alpha = 1 is a Newton (iLQR-type) step in u and (31) uses the reduced
+  /// Hessian/gradient of the cost w.r.t. T. Input bounds are ignored in P and p.
+  kRiccati
+};
+
 /// Settings of BackwardPass.
 struct BackwardPassSettings {
-  /// Include the paper's driving term (P F_u + L_zu) du^{i-1} in the p-equation of (30).
+  /// The equation for P, p (default: the paper's Lyapunov-type (30)).
+  BackwardEquation equation = BackwardEquation::kLyapunov;
+  /// Legacy switch: true upgrades kLyapunov to kRiccatiFeedback (same as setting `equation`).
+  bool riccati = false;
+  /// Riccati variants: H = L_uu + mu I, mu = riccati_regularization * (1 + max|diag L_uu|).
+  /// Use the same value as OnlineControllerSettings::regularization so that the gain the
+  /// controller applies is the gain the Riccati equation assumed. >= 0.
+  double riccati_regularization = 0.1;
+  /// Include the paper's driving term (P F_u + L_zu) du^{i-1} in the p-equation of (30)
+  /// (kLyapunov and kRiccatiFeedback only).
   /// false (default): p is the exact adjoint of the linearized cost, so L_u + F_u^T p is the
   /// gradient of the cost w.r.t. u(tau) and p_2(0) the gradient w.r.t. T.
   bool use_previous_du = false;
@@ -105,6 +133,7 @@ class BackwardPass {
     Vector Lu;   // m
     Matrix Luu;  // m x m
     Vector du;   // m: previous control variation (0 unless use_previous_du)
+    Matrix LuuInv;  // m x m: (L_uu + mu I)^{-1} (Riccati variants only)
     void Allocate(int n_max, int nz_max, int m);
   };
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev, Coefficients* c);
@@ -148,6 +177,13 @@ class BackwardPass {
   Vector kp_[4];          // stage derivatives of p
   Matrix PA_;             // nz_max x nz_max
   Vector Bdu_;            // n_max
+  Matrix M_;              // nz_max x m: P F_u + L_zu (Riccati variants)
+  Matrix W_;              // nz_max x m: M H^{-1} (Riccati variants)
+  Vector r_;              // m: L_u + F_u^T p (kRiccati)
+  Eigen::LLT<Matrix> llt_;  // m x m (Riccati variants)
+  BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
+  bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }
+  void Invert(Coefficients* c);
 };
 
 }  // namespace ddoc

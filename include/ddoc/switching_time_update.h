@@ -13,9 +13,10 @@ namespace ddoc {
 
 /// Settings of the switching-time update.
 struct SwitchingTimeSettings {
-  /// Levenberg-Marquardt floor: the reduced Hessian H = S^T P22 S gets mu I added so that its
-  /// smallest eigenvalue is at least relative_regularization * max(1, lambda_max(H)).
-  double relative_regularization = 1e-6;
+  /// Levenberg-Marquardt-type floor on the spectrum of the reduced Hessian H = S^T P22 S:
+  /// eigenvalues below floor = relative_regularization * max(1, max|lambda(H)|) become
+  /// max(|lambda|, floor).
+  double relative_regularization = 1e-3;
   /// Additional cap |dD_k| <= max_duration_step on each duration change (s); default none.
   double max_duration_step = std::numeric_limits<double>::infinity();
 };
@@ -24,7 +25,7 @@ struct SwitchingTimeSettings {
 struct SwitchingTimeStep {
   Vector dT;                  ///< K: delta T_alpha
   Vector T_planned;           ///< K: T^{i+1} = T^i + dT
-  double regularization = 0;  ///< the mu that was added (0 when H was positive definite enough)
+  double regularization = 0;  ///< largest eigenvalue increase applied (0: H was used as is)
   BoxQPStatus status = BoxQPStatus::kConverged;
 };
 
@@ -35,11 +36,14 @@ struct SwitchingTimeStep {
 /// box duration_min - D^i <= dD <= duration_max - D^i (the paper's (25) writes the box on T
 /// directly, which only holds for K = 1).
 ///
-/// P22 comes from the Lyapunov-type (30) and need not be positive definite. Levenberg-Marquardt:
-/// with lambda_min, lambda_max the extreme eigenvalues of H, mu = max(0, floor - lambda_min),
-/// floor = relative_regularization * max(1, |lambda_max|), and H + mu I is used. For an
-/// indefinite H this turns the step into a damped gradient step; with H = 0 (e.g. all durations
-/// fixed) the bounds decide.
+/// P22 comes from the Lyapunov-type (30) and need not be positive definite (it is often
+/// singular: the Lyapunov P22 has no curvature in D_0 when l does not depend on time). Regularized
+/// Newton step (Levenberg-Marquardt type, eigenvalue modification): with H = V diag(lambda) V^T
+/// and floor = relative_regularization * max(1, max|lambda|), every lambda_i < floor is replaced
+/// by max(|lambda_i|, floor). Positive definite H are used unchanged (exact Newton step in the
+/// box); negative curvature is mirrored, so the step stays a descent direction whose length
+/// scales with alpha (a plain shift H + mu I would make the step huge along the shifted
+/// directions).
 ///
 /// Not allocation-free (runs between trials).
 SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVectorRef& T_nominal,

@@ -15,6 +15,7 @@ void BackwardPass::Coefficients::Allocate(int n_max, int nz_max, int m) {
   Lu.setZero(m);
   Luu.setZero(m, m);
   du.setZero(m);
+  LuuInv.setZero(m, m);
 }
 
 void BackwardPass::Allocate(const Problem& problem, int max_samples,
@@ -26,6 +27,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   }
   problem_ = &problem;
   settings_ = settings;
+  if (!(settings.riccati_regularization >= 0)) {
+    throw InvalidArgument("BackwardPassSettings: riccati_regularization = " +
+                          std::to_string(settings.riccati_regularization) + ", expected >= 0");
+  }
   normalization_ = std::make_unique<TimeNormalization>(problem);
   const SwitchedSystem& sys = *problem.system;
   K_ = sys.num_modes();
@@ -61,6 +66,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   }
   PA_.setZero(nz_max_, nz_max_);
   Bdu_.setZero(n_max_);
+  M_.setZero(nz_max_, m_);
+  W_.setZero(nz_max_, m_);
+  r_.setZero(m_);
+  llt_ = Eigen::LLT<Matrix>(m_);
   valid_ = false;
 }
 
@@ -106,6 +115,23 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   } else {
     c->du.setZero();
   }
+  if (riccati()) Invert(c);
+}
+
+void BackwardPass::Invert(Coefficients* c) {
+  // (L_uu + mu I)^{-1} without allocation (LLT preallocated for m x m).
+  c->LuuInv = c->Luu;
+  const double mu =
+      settings_.riccati_regularization * (1.0 + c->Luu.diagonal().cwiseAbs().maxCoeff());
+  c->LuuInv.diagonal().array() += mu;
+  llt_.compute(c->LuuInv);
+  if (llt_.info() != Eigen::Success) {
+    throw InvalidArgument(
+        "BackwardPass (Riccati variant): L_uu + mu I is not positive definite; raise "
+        "riccati_regularization");
+  }
+  c->LuuInv.setIdentity();
+  llt_.solveInPlace(c->LuuInv);
 }
 
 void BackwardPass::Interpolate(int n, int nz, const Coefficients& a, const Coefficients& b,
@@ -113,10 +139,15 @@ void BackwardPass::Interpolate(int n, int nz, const Coefficients& a, const Coeff
   c->A.topLeftCorner(n, nz) = 0.5 * (a.A.topLeftCorner(n, nz) + b.A.topLeftCorner(n, nz));
   c->Q.topLeftCorner(nz, nz) = 0.5 * (a.Q.topLeftCorner(nz, nz) + b.Q.topLeftCorner(nz, nz));
   c->Lz.head(nz) = 0.5 * (a.Lz.head(nz) + b.Lz.head(nz));
-  if (settings_.use_previous_du) {
+  if (settings_.use_previous_du || riccati()) {
     c->B.topRows(n) = 0.5 * (a.B.topRows(n) + b.B.topRows(n));
     c->Lzu.topRows(nz) = 0.5 * (a.Lzu.topRows(nz) + b.Lzu.topRows(nz));
     c->du = 0.5 * (a.du + b.du);
+  }
+  if (riccati()) {
+    c->Lu = 0.5 * (a.Lu + b.Lu);
+    c->Luu = 0.5 * (a.Luu + b.Luu);
+    Invert(c);
   }
 }
 
@@ -128,6 +159,21 @@ void BackwardPass::Derivative(int n, int nz, const Coefficients& c, const ConstM
   dP = PA + PA.transpose() + c.Q.topLeftCorner(nz, nz);
   dp = c.Lz.head(nz);
   dp.noalias() += c.A.topLeftCorner(n, nz).transpose() * p.head(n);
+  if (riccati()) {
+    // - (P F_u + L_zu) H^{-1} (F_u^T P + L_uz) [and - (P F_u + L_zu) H^{-1} (L_u + F_u^T p)].
+    auto M = M_.topRows(nz);
+    M = c.Lzu.topRows(nz);
+    M.noalias() += P.leftCols(n) * c.B.topRows(n);
+    auto W = W_.topRows(nz);
+    W.noalias() = M * c.LuuInv;
+    dP.noalias() -= W * M.transpose();
+    if (equation_ == BackwardEquation::kRiccati) {
+      r_ = c.Lu;
+      r_.noalias() += c.B.topRows(n).transpose() * p.head(n);
+      dp.noalias() -= W * r_;
+      return;
+    }
+  }
   if (settings_.use_previous_du) {
     auto Bdu = Bdu_.head(n);
     Bdu.noalias() = c.B.topRows(n) * c.du;
@@ -193,6 +239,10 @@ void BackwardPass::StoreOutputs(int k, int j, const Coefficients& c) {
 void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
   if (problem_ == nullptr) throw InvalidArgument("BackwardPass::Run: call Allocate first");
   valid_ = false;
+  equation_ = settings_.equation;
+  if (settings_.riccati && equation_ == BackwardEquation::kLyapunov) {
+    equation_ = BackwardEquation::kRiccatiFeedback;
+  }
   // Allocation-free structural checks (the full validation is the caller's job).
   if (nominal.num_modes() != K_ || nominal.T.size() != K_) {
     throw InvalidArgument("BackwardPass::Run: trajectory has " +

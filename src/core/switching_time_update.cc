@@ -30,14 +30,25 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   for (int k = 0; k < K; ++k) D(k) = T_nominal(k) - (k == 0 ? 0.0 : T_nominal(k - 1));
   Matrix H = S.transpose() * (0.5 * (P22 + P22.transpose())) * S;
   Vector g = alpha * (S.transpose() * p2);
-  // Levenberg-Marquardt floor on the spectrum.
-  Eigen::SelfAdjointEigenSolver<Matrix> eig(H, Eigen::EigenvaluesOnly);
-  const double lmin = eig.eigenvalues().minCoeff();
-  const double lmax = eig.eigenvalues().cwiseAbs().maxCoeff();
+  // Levenberg-Marquardt-type modification of the spectrum: eigenvalues below the floor are
+  // replaced by max(|lambda|, floor) (negative curvature mirrored, zero curvature floored), so
+  // the step keeps scaling with alpha and stays a descent direction.
+  Eigen::SelfAdjointEigenSolver<Matrix> eig(H);
+  const Vector& lambda = eig.eigenvalues();
+  const double lmax = lambda.cwiseAbs().maxCoeff();
   const double floor = settings.relative_regularization * std::max(1.0, lmax);
   SwitchingTimeStep out;
-  out.regularization = std::max(0.0, floor - lmin);
-  H.diagonal().array() += out.regularization;
+  Vector modified = lambda;
+  for (int i = 0; i < K; ++i) {
+    if (lambda(i) < floor) {
+      modified(i) = std::max(std::abs(lambda(i)), floor);
+      out.regularization = std::max(out.regularization, modified(i) - lambda(i));
+    }
+  }
+  if (out.regularization > 0) {
+    H = eig.eigenvectors() * modified.asDiagonal() * eig.eigenvectors().transpose();
+    H = 0.5 * (H + H.transpose());
+  }
   Vector lo = problem.bounds.duration_min - D;
   Vector hi = problem.bounds.duration_max - D;
   for (int k = 0; k < K; ++k) {

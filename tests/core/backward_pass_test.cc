@@ -245,6 +245,47 @@ TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
   EXPECT_GT(std::abs(fd_u), 0.05);
 }
 
+TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
+  // dP/dt = -(2 a P + q - P^2 b^2 / r), P(T) = s, integrated independently with fine RK4.
+  const ScalarLqSetup setup{ScalarLq{}};
+  const ScalarLq& lq = setup.lq;
+  const Trajectory traj = setup.Exact(481);
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kRiccati;
+  settings.riccati_regularization = 0;
+  BackwardPass pass;
+  pass.Allocate(setup.problem, 481, settings);
+  pass.Run(traj);
+  auto f = [&](double P) { return 2 * lq.a * P + lq.q - P * P * lq.b * lq.b / lq.r; };
+  double P = lq.s;
+  const int M = 48000;  // 100 fine steps per sample interval
+  const double h = lq.T / M;
+  for (int i = M; i > 0; --i) {
+    if (i % 100 == 0) {
+      const int j = i / 100;
+      EXPECT_NEAR(pass.P(0, j)(0, 0), P, 1e-7 * P) << "j " << j;
+    }
+    const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2), k4 = f(P + h * k3);
+    P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+  }
+  EXPECT_NEAR(pass.P(0, 0)(0, 0), P, 1e-7 * P);
+  // kRiccatiFeedback (and the legacy switch `riccati`) has the same P but keeps the gradient
+  // adjoint p of the Lyapunov form.
+  BackwardPassSettings fb;
+  fb.riccati = true;
+  fb.riccati_regularization = 0;
+  BackwardPass feedback, lyapunov;
+  feedback.Allocate(setup.problem, 481, fb);
+  lyapunov.Allocate(setup.problem, 481);
+  feedback.Run(traj);
+  lyapunov.Run(traj);
+  for (int j : {0, 200, 480}) {
+    EXPECT_NEAR(feedback.P(0, j)(0, 0), pass.P(0, j)(0, 0), 1e-12 * pass.P(0, j)(0, 0));
+    EXPECT_EQ(feedback.p(0, j), lyapunov.p(0, j));
+  }
+  EXPECT_NE(pass.p(0, 0)(0), lyapunov.p(0, 0)(0));  // kRiccati changes p
+}
+
 TEST(BackwardPass, RunDoesNotAllocate) {
   ASSERT_TRUE(MallocCountingWorks());
   {
@@ -262,9 +303,19 @@ TEST(BackwardPass, RunDoesNotAllocate) {
   pass.Allocate(setup.problem, 2000, settings);
   const Matrix du = Matrix::Constant(1, 1000, 0.1);
   pass.Run(traj, &du);
+  {
+    MallocCounter counter;
+    pass.Run(traj, &du);
+    EXPECT_EQ(counter.count(), 0);
+  }
+  BackwardPass riccati;
+  BackwardPassSettings rs;
+  rs.equation = BackwardEquation::kRiccati;
+  riccati.Allocate(setup.problem, 2000, rs);
+  riccati.Run(traj);
   MallocCounter counter;
-  pass.Run(traj, &du);
-  EXPECT_EQ(counter.count(), 0);
+  riccati.Run(traj);
+  EXPECT_EQ(counter.count(), 0) << "kRiccati";
 }
 
 TEST(BackwardPass, RejectsMismatchedTrajectories) {

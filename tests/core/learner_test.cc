@@ -105,7 +105,9 @@ LearnerSettings TestSettings() {
   return s;
 }
 
-class TwoModeLqTest : public ::testing::TestWithParam<bool> {};
+// 0: the paper's (30) with the exact adjoint (default); 1: (30) with the du^{i-1} term;
+// 2: the Riccati-feedback extension (P from the Riccati equation, p the gradient adjoint).
+class TwoModeLqTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
   TwoModeLq lq;
@@ -123,13 +125,17 @@ TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
   FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
                          [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
   LearnerSettings settings = TestSettings();
-  settings.backward.use_previous_du = GetParam();
+  settings.backward.use_previous_du = GetParam() == 1;
+  if (GetParam() == 2) {
+    settings.backward.equation = BackwardEquation::kRiccatiFeedback;
+    settings.backward.riccati_regularization = settings.controller.regularization;
+  }
   Learner learner(p.problem, settings);
   const SolveResult result = learner.Solve(plant, plant, lq.x0, initial);
   std::printf("status %d trials %d iterations %d cost %.6f T %.4f %.4f | optimum D %.3f %.3f cost %.6f\n",
               static_cast<int>(result.status), result.trials, result.iterations, result.cost,
               result.T(0), result.T(1) - result.T(0), coarse.D0, coarse.D1, coarse.cost);
-  if (!GetParam()) {
+  if (GetParam() != 1) {
     EXPECT_EQ(result.status, LearnerStatus::kConverged);
   } else {
     // The paper's variant with the du^{i-1} term in (30) reaches the same point but ends with
@@ -288,7 +294,30 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
               1e-9 * learner.nominal_cost());
 }
 
-INSTANTIATE_TEST_SUITE_P(WithAndWithoutPreviousDu, TwoModeLqTest, ::testing::Bool());
+INSTANTIATE_TEST_SUITE_P(BackwardVariants, TwoModeLqTest, ::testing::Values(0, 1, 2));
+
+// The full Riccati extension (Newton-type step) decreases the cost monotonically and fast at
+// first, but on this problem its line search stalls before the optimum (README: known gaps).
+TEST(Learner, FullRiccatiVariantDecreasesTheCost) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  LearnerSettings settings = TestSettings();
+  settings.backward.equation = BackwardEquation::kRiccati;
+  settings.backward.riccati_regularization = settings.controller.regularization;
+  Learner learner(p.problem, settings);
+  const SolveResult result = learner.Solve(plant, plant, lq.x0, initial);
+  std::printf("kRiccati: status %d trials %d iterations %d cost %.6f -> %.6f\n",
+              static_cast<int>(result.status), result.trials, result.iterations,
+              result.cost_history.front(), result.cost);
+  ASSERT_GE(result.cost_history.size(), 3u);
+  for (size_t i = 1; i < result.cost_history.size(); ++i) {
+    EXPECT_LT(result.cost_history[i], result.cost_history[i - 1]);
+  }
+  EXPECT_LT(result.cost, 0.5 * result.cost_history.front());
+}
 
 }  // namespace
 }  // namespace testing

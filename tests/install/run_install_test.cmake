@@ -1,0 +1,20 @@
+# Installs the ddoc build tree to a temporary prefix, configures and builds the external
+# consumer project against it with find_package(ddoc), and runs it.
+# Inputs: BUILD_DIR, SOURCE_DIR (consumer sources), WORK_DIR, CONFIG.
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "command failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  message("${out}")
+endfunction()
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix --component ddoc_dev)
+if(NOT EXISTS ${WORK_DIR}/prefix/include/ddoc/ddoc.h)
+  message(FATAL_ERROR "headers were not installed")
+endif()
+run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -DCMAKE_BUILD_TYPE=${CONFIG}
+    -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix)
+run(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+run(${WORK_DIR}/build/consumer)
