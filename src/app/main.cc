@@ -111,8 +111,9 @@ int Run(int argc, char** argv) {
       ->required();
   cli.add_option("--out,-o", out_dir, "output directory (default: out/<scenario name>)");
   cli.add_option("--method,-m", method, "alg1 | ocfb | mrl (overrides the scenario)");
-  cli.add_option("--hops", hops, "number of hops (overrides the scenario)");
-  cli.add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
+  CLI::Option* hops_opt = cli.add_option("--hops", hops, "number of hops (overrides the scenario)");
+  CLI::Option* seconds_opt =
+      cli.add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
   cli.add_option("--robot", robot, "robot MJCF (overrides the scenario)");
   cli.add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
   cli.add_option("--push", pushes, "extra push TIME,FORCE,DURATION (repeatable)");
@@ -136,10 +137,12 @@ int Run(int argc, char** argv) {
   try {
     s = LoadScenario(scenario_path);
     if (!method.empty()) s.method = ParseMethod(method);
-    if (hops >= 0) s.hops = hops;
-    if (seconds >= 0) s.seconds = seconds;
-    if (hops >= 0 && seconds < 0) s.seconds = 0;
-    if (seconds >= 0 && hops < 0) s.hops = 0;
+    if (*hops_opt && hops < 0) throw ScenarioError("--hops must be >= 0, got " + std::to_string(hops));
+    if (*seconds_opt && !(seconds >= 0)) throw ScenarioError("--seconds must be >= 0");
+    if (*hops_opt) s.hops = hops;
+    if (*seconds_opt) s.seconds = seconds;
+    if (*hops_opt && !*seconds_opt) s.seconds = 0;
+    if (*seconds_opt && !*hops_opt) s.hops = 0;
     if (!robot.empty()) s.robot_mjcf = robot;
     if (!model_mjcf.empty()) s.model_mjcf = model_mjcf;
     if (no_pushes) s.pushes.clear();

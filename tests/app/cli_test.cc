@@ -1,0 +1,174 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// ddoc-hopper end to end: exit codes, bad input before the simulation, incremental logs of a run
+// that falls, and rendering that does not change the simulation.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout + stderr
+};
+
+Result RunCli(const std::string& args) {
+  const std::string cmd = std::string(DDOC_HOPPER_BIN) + " " + args + " 2>&1";
+  Result r;
+  std::FILE* p = popen(cmd.c_str(), "r");
+  if (p == nullptr) return r;
+  char buf[4096];
+  size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof(buf), p)) > 0) r.output.append(buf, n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string Scenario(const std::string& name) {
+  return std::string(DDOC_MODELS_DIR) + "/scenarios/" + name;
+}
+
+std::string ReadFile(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(line);
+  return out;
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("ddoc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Out(const std::string& sub) const { return (dir_ / sub).string(); }
+  fs::path dir_;
+};
+
+TEST_F(CliTest, HelpExitsZero) {
+  const Result r = RunCli("--help");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("--method"), std::string::npos);
+  EXPECT_NE(r.output.find("Exit codes"), std::string::npos);
+}
+
+TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
+  struct Case {
+    std::string args;
+    std::string needle;
+  };
+  const std::string good = Scenario("default.xml");
+  std::ofstream(dir_ / "broken.xml") << "<ddoc_scenario><robot mjcf='x.xml'>";
+  std::ofstream(dir_ / "bad_robot.xml") << "<mujoco><worldbody/></mujoco>";
+  const Case cases[] = {
+      {"", "scenario is required"},
+      {Out("missing.xml"), "does not exist"},
+      {Out("broken.xml"), "malformed XML"},
+      {good + " --method ppo", "unknown method \"ppo\""},
+      {good + " --hops -3", "hops must be >= 0"},
+      {good + " --push 1,2", "TIME,FORCE,DURATION"},
+      {good + " --robot " + Out("bad_robot.xml"), "bad_robot.xml"},
+      {good + " --robot " + Out("nope.xml"), "nope.xml"},
+      {good + " --out /proc/ddoc_no/out", "/proc/ddoc_no/out"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.args);
+    const bool has_out = c.args.find("--out") != std::string::npos;
+    const bool has_hops = c.args.find("--hops") != std::string::npos;
+    const Result r = RunCli(c.args + (has_out ? "" : " --out " + Out("o")) +
+                            (has_hops ? "" : " --hops 1"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(c.needle), std::string::npos) << r.output;
+  }
+}
+
+#ifdef DDOC_TEST_RENDER
+TEST_F(CliTest, BadRenderSettingsFailBeforeTheSimulation) {
+  const std::string good = Scenario("default.xml") + " --hops 1 --out " + Out("o");
+  for (const std::string& flags :
+       {std::string("--width 0"), std::string("--height -4"), std::string("--fps 0")}) {
+    SCOPED_TRACE(flags);
+    const Result r = RunCli(good + " --render " + Out("frames") + " " + flags);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("render"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(dir_ / "o" / "hops.csv")) << "the simulation started";
+  }
+  std::ofstream(dir_ / "file") << "x";
+  const Result r = RunCli(good + " --render " + Out("file/frames"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "o" / "hops.csv"));
+}
+
+TEST_F(CliTest, RenderingDoesNotChangeTheRun) {
+  const std::string common = Scenario("default.xml") + " --hops 3 --method ocfb";
+  const Result plain = RunCli(common + " --out " + Out("plain"));
+  const Result drawn = RunCli(common + " --out " + Out("drawn") + " --render " + Out("frames") +
+                              " --width 96 --height 72 --fps 20");
+  ASSERT_TRUE(plain.code == 0 || plain.code == 3) << plain.output;
+  EXPECT_EQ(drawn.code, plain.code) << drawn.output;
+  const std::string a = ReadFile(dir_ / "plain" / "hops.csv");
+  const std::string b = ReadFile(dir_ / "drawn" / "hops.csv");
+  ASSERT_GT(Lines(a).size(), 1u);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(ReadFile(dir_ / "plain" / "trajectory.csv"), ReadFile(dir_ / "drawn" / "trajectory.csv"));
+  // Frames: one at t = 0 and one every 1/fps of simulated time up to the end of the run.
+  const std::vector<std::string> traj = Lines(ReadFile(dir_ / "plain" / "trajectory.csv"));
+  const double t_end = std::stod(traj.back().substr(0, traj.back().find(',')));
+  int frames = 0;
+  for (const auto& e : fs::directory_iterator(dir_ / "frames")) {
+    frames += e.path().extension() == ".png" ? 1 : 0;
+  }
+  EXPECT_NEAR(frames, t_end * 20 + 1, 1.0);
+}
+#endif
+
+TEST_F(CliTest, AFallExitsThreeAndKeepsTheLogs) {
+  // A 400 N shove for 0.3 s topples any hopper.
+  const Result r = RunCli(Scenario("default.xml") + " --hops 20 --push 0.6,-400,0.3 --out " + Out("run"));
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("fell"), std::string::npos) << r.output;
+  const std::string summary = ReadFile(dir_ / "run" / "summary.json");
+  EXPECT_NE(summary.find("\"fell\": true"), std::string::npos) << summary;
+  const std::vector<std::string> events = Lines(ReadFile(dir_ / "run" / "events.csv"));
+  ASSERT_GE(events.size(), 3u);
+  EXPECT_NE(events.back().find(",fall,"), std::string::npos) << events.back();
+  bool push = false;
+  for (const auto& e : events) push = push || e.find("push_start") != std::string::npos;
+  EXPECT_TRUE(push);
+  EXPECT_GT(Lines(ReadFile(dir_ / "run" / "trajectory.csv")).size(), 100u);
+}
+
+TEST_F(CliTest, ShortRunWritesEveryFile) {
+  const Result r = RunCli(Scenario("default.xml") + " --hops 2 --out " + Out("run"));
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.output;
+  for (const char* f : {"hops.csv", "trajectory.csv", "events.csv", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(dir_ / "run" / f)) << f;
+  }
+  const std::vector<std::string> hops = Lines(ReadFile(dir_ / "run" / "hops.csv"));
+  EXPECT_EQ(hops[0],
+            "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
+            "dT2,method");
+  if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
+}
+
+}  // namespace
