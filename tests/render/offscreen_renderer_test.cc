@@ -238,6 +238,41 @@ TEST_F(OffscreenRendererTest, SunLightKeepsTheFloorLitFarFromTheModelsLight) {
   EXPECT_GT(far_sun, 0.5 * near_sun) << "near " << near_sun << ", far " << far_sun;
 }
 
+TEST_F(OffscreenRendererTest, CoarseInfinitePlaneKeepsTheFloorTexture) {
+  // The finite stand-in for the infinite floor may change the lighting, not the texture:
+  // the checker edges (strong horizontal gradients) must be at the same pixels.
+  auto m = testing::LoadModel(testing::TestModelXml(true));
+  auto d = testing::MakeData(m.get());
+  SetX(m.get(), d.get(), 1.3);
+  std::vector<unsigned char> images[2];
+  for (int fine = 0; fine < 2; ++fine) {
+    RenderSettings s;
+    s.width = kWidth;
+    s.height = kHeight;
+    s.fine_infinite_planes = fine;
+    std::string error;
+    auto r = OffscreenRenderer::Create(m.get(), s, &error);
+    ASSERT_NE(r, nullptr) << error;
+    r->Render(m.get(), d.get(), "", "", &images[fine]);
+  }
+  auto grey = [&](const std::vector<unsigned char>& rgb, int x, int y) {
+    const unsigned char* p = Pixel(rgb, kWidth, x, y);
+    return (p[0] + p[1] + p[2]) / 3.0;
+  };
+  int edges = 0, matched = 0;
+  for (int y = 3 * kHeight / 4; y < kHeight; ++y) {
+    for (int x = 0; x + 1 < kWidth; ++x) {
+      const double g_fine = grey(images[1], x + 1, y) - grey(images[1], x, y);
+      const double g_coarse = grey(images[0], x + 1, y) - grey(images[0], x, y);
+      if (std::abs(g_fine) < 12) continue;
+      ++edges;
+      matched += std::abs(g_coarse) > 4 && (g_coarse > 0) == (g_fine > 0);
+    }
+  }
+  ASSERT_GT(edges, 100) << "the checker floor should have edges";
+  EXPECT_GT(matched, 0.9 * edges) << matched << " of " << edges << " edges match";
+}
+
 TEST_F(OffscreenRendererTest, OverlayTextIsDrawnTopLeft) {
   auto m = testing::LoadModel(testing::TestModelXml(true));
   auto d = testing::MakeData(m.get());

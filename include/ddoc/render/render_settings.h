@@ -47,6 +47,11 @@ struct RenderSettings {
   /// lights, so that the floor stays evenly lit wherever the robot goes: a light fixed in
   /// the world (like the hopper MJCF's spotlight at x = 0) leaves the floor dark ~10 m away.
   bool sun_light = true;
+  /// Keep MuJoCo's own tessellation of infinite planes (a 200 x 200 quad grid, lit per
+  /// vertex). Off by default: the renderer substitutes a 48 x 48 grid of the same extent,
+  /// which leaves the texture unchanged, coarsens only the lighting, and halves the time of
+  /// a 640x480 hopper frame (measured: ~9 -> ~4-6 ms CPU).
+  bool fine_infinite_planes = false;
   /// Shadow pass. Off by default: on llvmpipe it costs ~10 ms per 640x480 frame
   /// (measured: render 8 ms without, 18-20 ms with shadows).
   bool shadows = false;
