@@ -1,0 +1,246 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// ddoc-hop-experiment: hop-after-hop closed-loop experiments on the ANALYTIC hopper, to measure
+// what makes forward hopping stable before going to MuJoCo. One hop = one trial, started at
+// takeoff; the next hop starts at the measured takeoff state of the previous one (the cycle
+// reset), exactly as on the robot.
+//
+//   --method ocfb   : solve OC-FB on the model (Learner::Solve), then apply ConvergedPolicy(alpha)
+//                     unchanged hop after hop on the plant (which may differ from the model).
+//   --method alg1   : hop 0 runs the OC-FB law, then incremental Algorithm 1 (NextTrial /
+//                     CompleteTrial) on the plant, each hop one trial.
+//   --floquet       : eigenvalues of the OC-FB closed-loop return map (takeoff -> takeoff) at the
+//                     state reached after the run (finite differences).
+// Output: one line per hop on stdout (CSV), a summary on stderr.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+
+#include "ddoc/cost.h"
+#include "ddoc/hopper/hopper_cost.h"
+#include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/nominal_gait.h"
+#include "ddoc/learner.h"
+#include "ddoc/plant.h"
+
+using namespace ddoc;
+
+namespace {
+
+struct Args {
+  std::map<std::string, std::string> kv;
+  double Get(const std::string& k, double d) const {
+    auto it = kv.find(k);
+    return it == kv.end() ? d : std::atof(it->second.c_str());
+  }
+  std::string Str(const std::string& k, const std::string& d) const {
+    auto it = kv.find(k);
+    return it == kv.end() ? d : it->second;
+  }
+  bool Has(const std::string& k) const { return kv.count(k) > 0; }
+};
+
+const char* kUsage =
+    "ddoc-hop-experiment [--key value]...\n"
+    "  --speed 0.5          gait forward speed (m/s)\n"
+    "  --method ocfb|alg1   (ocfb)\n"
+    "  --hops 100           closed-loop hops\n"
+    "  --solve-trials 50    OC-FB model solve trials (0: the constant-input gait is the nominal)\n"
+    "  --reg 0.1            OnlineControllerSettings::regularization (model solve and robot)\n"
+    "  --riccati 0|1|2      BackwardPassSettings::equation: 0 kLyapunov (paper), 1 kRiccatiFeedback,\n"
+    "                       2 kRiccati (mu = --reg)\n"
+    "  --alpha-ff 0|1       alpha on the feed-forward only (1) or on all of b (0, the paper)\n"
+    "  --ocfb-alpha 0       alpha of ConvergedPolicy\n"
+    "  --c 1e-7 --gamma 0.5 --grow 0|1   Algorithm 1 line search\n"
+    "  --reference own|nominal  x_ref of I1 for the learner on the plant\n"
+    "  --model-M 10 --model-cd 0 --plant-M 10 --plant-cd 0\n"
+    "  --pert 0.05          initial perturbation: xd += p, phi += p/5, phid += p\n"
+    "  --push-hop -1 --push-dv 0   add dv to xd at the start of that hop\n"
+    "  --floquet 0|1        return-map eigenvalues of the OC-FB law\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    std::string k = argv[i];
+    if (k == "--help" || k == "-h") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (k.rfind("--", 0) != 0 || i + 1 >= argc) {
+      std::fprintf(stderr, "bad argument '%s'\n%s", k.c_str(), kUsage);
+      return 2;
+    }
+    a.kv[k.substr(2)] = argv[++i];
+  }
+  const double speed = a.Get("speed", 0.5);
+  const std::string method = a.Str("method", "ocfb");
+  const int hops = static_cast<int>(a.Get("hops", 100));
+  const std::string reference = a.Str("reference", "own");
+
+  HopperParams mp;
+  mp.M = a.Get("model-M", 10);
+  mp.c_d = a.Get("model-cd", 0);
+  HopperParams pp;
+  pp.M = a.Get("plant-M", mp.M);
+  pp.c_d = a.Get("plant-cd", mp.c_d);
+  HopperModel model(mp), truth(pp);
+  HopperCost cost(model);
+  Problem pr;
+  pr.system = &model;
+  pr.cost = &cost;
+  pr.bounds.u_min = hopper::InputLowerBound();
+  pr.bounds.u_max = hopper::InputUpperBound();
+  pr.bounds.duration_min = Eigen::Vector2d(0.05, 0.05);
+  pr.bounds.duration_max = Eigen::Vector2d(1.5, 1.0);
+  pr.surface_weights = Eigen::Vector2d(kHopperSurfaceWeight, 0);
+
+  NominalGaitSettings gs;
+  gs.forward_speed = speed;
+  const NominalGait g = FindNominalGait(mp, gs);
+  cost.SetReference(g.x0);
+
+  ModelPlant mplant(pr);
+  mplant.set_guard(
+      [&](int k, const ConstVectorRef& x, const ConstVectorRef& u) { return model.Guard(k, x, u); });
+  ModelPlant plant(truth, pr.bounds);
+  plant.set_guard(
+      [&](int k, const ConstVectorRef& x, const ConstVectorRef& u) { return truth.Guard(k, x, u); });
+
+  LearnerSettings ls;
+  ls.c = a.Get("c", 1e-7);
+  ls.gamma = a.Get("gamma", 0.5);
+  ls.reset_alpha_on_accept = a.Get("grow", 1) == 0;
+  ls.controller.alpha_scales_feedback = a.Get("alpha-ff", 1) == 0;
+  ls.controller.regularization = a.Get("reg", 0.1);
+  const int riccati = static_cast<int>(a.Get("riccati", 0));
+  if (riccati == 1) ls.backward.equation = BackwardEquation::kRiccatiFeedback;
+  if (riccati == 2) ls.backward.equation = BackwardEquation::kRiccati;
+  ls.backward.riccati_regularization = ls.controller.regularization;
+  ls.max_trials = std::max(1, static_cast<int>(a.Get("solve-trials", 50)));
+  const bool solve = a.Get("solve-trials", 50) > 0;
+
+  Learner ocfb(pr, ls);
+  const Eigen::Vector2d D(g.T0(0), g.T0(1) - g.T0(0));
+  const Eigen::Vector4d u0 = g.u0;
+  FunctionPolicy init(D, [u0](int, double, const ConstVectorRef&, VectorRef u) { u = u0; });
+  if (solve) {
+    SolveResult r = ocfb.Solve(mplant, mplant, g.x0, init);
+    std::fprintf(stderr, "# gait I1 %.4g T %.3f %.3f; OC-FB solve status %d iters %d trials %d cost %.4f -> %.4f\n",
+                 g.periodicity, g.T0(0), g.T0(1), static_cast<int>(r.status), r.iterations,
+                 r.trials, r.cost_history.front(), r.cost);
+  } else {
+    Trajectory t0;
+    mplant.Run(g.x0, init, &t0);
+    ocfb.Initialize(t0);
+    std::fprintf(stderr, "# gait I1 %.4g, nominal = constant-input gait, cost %.4f\n",
+                 g.periodicity, ocfb.nominal_cost());
+  }
+  const double ocfb_alpha = a.Get("ocfb-alpha", 0.0);
+
+  // Takeoff state of the next hop from a measured hop (foot at x = 0).
+  auto next_x0 = [&](const Trajectory& tr) {
+    Eigen::Matrix<double, 14, 1> xn;
+    truth.TakeoffMap(tr.modes[1].x.rightCols(1), 0.0, xn);
+    return Vector(xn);
+  };
+  auto hop_cost = [&](const Trajectory& tr) {
+    cost.SetReference(tr.x0);
+    return EvaluateCost(pr, tr);
+  };
+
+  Vector x0 = g.x0;
+  const double pert = a.Get("pert", 0.05);
+  x0(hopper::kXd) += pert;
+  x0(hopper::kPhi) += pert / 5;
+  x0(hopper::kPhid) += pert;
+  const int push_hop = static_cast<int>(a.Get("push-hop", -1));
+  const double push_dv = a.Get("push-dv", 0.0);
+
+  std::unique_ptr<Learner> learner;
+  if (method == "alg1") learner = std::make_unique<Learner>(pr, ls);
+  std::printf("hop,cost,i1,T1,T2,theta0,phi0,xd0,yd0,alpha,accepted,nominal_cost\n");
+  Trajectory tr;
+  int survived = 0;
+  double last_cost = 0, min_cost = 1e300;
+  for (int hop = 0; hop < hops; ++hop) {
+    if (hop == push_hop) x0(hopper::kXd) += push_dv;
+    OnlineController* pol = nullptr;
+    if (method == "ocfb" || hop == 0) {
+      cost.SetReference(g.x0);
+      pol = &ocfb.ConvergedPolicy(ocfb_alpha);
+    } else {
+      pol = &learner->NextTrial();
+    }
+    try {
+      plant.Run(x0, *pol, &tr);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "# hop %d: plant failed: %s\n", hop, e.what());
+      break;
+    }
+    const CostBreakdown cb = hop_cost(tr);
+    double alpha = pol->alpha();
+    int accepted = 1;
+    double ncost = cb.total;
+    if (learner) {
+      if (reference == "nominal") cost.SetReference(g.x0);
+      else cost.SetReference(tr.x0);
+      if (hop == 0) {
+        learner->Initialize(tr);
+      } else {
+        TrialResult r = learner->CompleteTrial(tr);
+        accepted = r.accepted;
+        ncost = learner->nominal_cost();
+      }
+    }
+    std::printf("%d,%.5f,%.5f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4g,%d,%.5f\n", hop, cb.total,
+                cb.switching(1), tr.T(0), tr.T(1), x0(hopper::kTheta), x0(hopper::kPhi),
+                x0(hopper::kXd), x0(hopper::kYd), alpha, accepted, ncost);
+    x0 = next_x0(tr);
+    const bool fell = std::abs(x0(hopper::kPhi)) > 1.0 || std::abs(x0(hopper::kTheta)) > 1.0 ||
+                      !(x0(hopper::kY) > 0.3) || !std::isfinite(cb.total) || cb.total > 1e3;
+    if (fell) {
+      std::fprintf(stderr, "# hop %d: fell / diverged (phi %.3f theta %.3f y %.3f cost %.3g)\n",
+                   hop, x0(hopper::kPhi), x0(hopper::kTheta), x0(hopper::kY), cb.total);
+      break;
+    }
+    ++survived;
+    last_cost = cb.total;
+    min_cost = std::min(min_cost, cb.total);
+  }
+  std::fprintf(stderr, "# survived %d/%d hops, last cost %.4f, min %.4f, final theta0 %.4f xd0 %.4f\n",
+               survived, hops, last_cost, min_cost, x0(hopper::kTheta), x0(hopper::kXd));
+
+  if (a.Get("floquet", 0) != 0) {
+    // Return map of the OC-FB law at the current state (finite differences, all 14 entries).
+    cost.SetReference(g.x0);
+    OnlineController& pol = ocfb.ConvergedPolicy(ocfb_alpha);
+    auto map = [&](const Vector& x) {
+      Trajectory t;
+      plant.Run(x, pol, &t);
+      return next_x0(t);
+    };
+    Vector xs = survived == hops ? x0 : Vector(g.x0);
+    const double h = 1e-6;
+    Matrix J(14, 14);
+    for (int i = 0; i < 14; ++i) {
+      Vector xp = xs, xm = xs;
+      xp(i) += h;
+      xm(i) -= h;
+      J.col(i) = (map(xp) - map(xm)) / (2 * h);
+    }
+    Eigen::EigenSolver<Matrix> es(J);
+    std::fprintf(stderr, "# return-map |eigenvalues|:");
+    Vector mags = es.eigenvalues().cwiseAbs();
+    std::sort(mags.data(), mags.data() + mags.size(), std::greater<double>());
+    for (int i = 0; i < 14; ++i) std::fprintf(stderr, " %.3f", mags(i));
+    std::fprintf(stderr, "\n# fixed-point residual |map(x)-x| = %.3g\n", (map(xs) - xs).norm());
+  }
+  return 0;
+}
