@@ -10,9 +10,9 @@
 
 #include <GL/osmesa.h>
 
-namespace ddoc {
+#include "render_internal.h"
 
-bool ValidateRenderGeometry(const RenderSettings& s, std::string* error);  // render_settings.cc
+namespace ddoc {
 
 namespace {
 

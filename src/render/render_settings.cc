@@ -11,6 +11,8 @@
 
 #include <unistd.h>
 
+#include "render_internal.h"
+
 namespace ddoc {
 namespace {
 
@@ -50,7 +52,6 @@ bool CheckNumbers(const RenderSettings& s, std::string* error) {
 
 }  // namespace
 
-// Used by OffscreenRenderer::Create, which needs no output directory.
 bool ValidateRenderGeometry(const RenderSettings& s, std::string* error) {
   return CheckNumbers(s, error);
 }

@@ -47,7 +47,8 @@ class OffscreenRenderer {
   OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
 
   /// Renders the state in d (poses as computed by the last mj_step/mj_forward) and reads
-  /// the image back. overlay_left and overlay_right are the two columns of the text table
+  /// the image back. m must be the model given to Create (its GL resources were made
+  /// from it). overlay_left and overlay_right are the two columns of the text table
   /// that mjr_overlay draws in the top-left corner (lines separated by '\n'; e.g. labels
   /// left, values right); empty strings draw nothing.
   /// rgb: resized to 3 * width * height, row-major, TOP row first (OpenGL's bottom-up
