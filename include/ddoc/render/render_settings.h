@@ -12,7 +12,7 @@ namespace ddoc {
 /// What to render and where to put the frames.
 ///
 /// Frames are taken at a fixed rate of SIMULATED time: frame j shows the state at the
-/// first simulation step with t >= j / fps (see FrameRecorder). The camera is MuJoCo's
+/// simulation step nearest to t = j / fps (see FrameRecorder). The camera is MuJoCo's
 /// free camera looking at (x_b, lookat_y, lookat_z), where x_b is the world x of
 /// `track_body`, so the camera follows the body horizontally at a fixed distance,
 /// azimuth and elevation.
@@ -67,7 +67,7 @@ struct RenderSettings {
   /// texture of its own (a textured floor, e.g. builtin="checker", is drawn as is).
   /// 0 disables the lines.
   double grid_spacing = 0.5;
-  /// Encode and write PNG files on a background thread, so that PNG encoding (~10 ms per
+  /// Encode and write PNG files on a background thread, so that PNG encoding (~5 ms per
   /// 640x480 frame) overlaps with simulation and rendering. Frames are identical either way.
   bool async_write = true;
 
@@ -78,8 +78,8 @@ struct RenderSettings {
   /// when missing and checks that a file can be created in it. Call it before the
   /// simulation starts. Returns false and sets *error (if non-null) to a message naming
   /// the field, the expected range and the actual value, e.g.
-  /// "render: width must be > 0, got -5" or
-  /// "render: cannot create output directory 'a/b': a exists and is not a directory".
+  /// "render: width must be in [1, 8192] pixels, got -5" or
+  /// "render: cannot create output directory 'f/frames': Not a directory" (f is a file).
   bool Validate(std::string* error) const;
 };
 
