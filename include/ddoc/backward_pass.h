@@ -49,6 +49,13 @@ struct BackwardPassSettings {
   /// Use the same value as OnlineControllerSettings::regularization so that the gain the
   /// controller applies is the gain the Riccati equation assumed. >= 0.
   double riccati_regularization = 0.1;
+  /// Option (default false = the exact Hessians): replace each switching-cost Hessian Phi_{k,zz}
+  /// by its projection onto the positive semidefinite cone (negative eigenvalues set to 0)
+  /// before it enters P. With a large terminal residual the exact Hessian of a squared
+  /// residual through a nonlinear map is indefinite, and a Riccati variant can then escape to
+  /// infinity inside the mode (measured on the MuJoCo hopper: non-finite P22 after a hop with
+  /// I1 ~ 20). Allocates (an eigen-decomposition per switch) when enabled.
+  bool psd_switching_hessians = false;
   /// Include the paper's driving term (P F_u + L_zu) du^{i-1} in the p-equation of (30)
   /// (kLyapunov and kRiccatiFeedback only).
   /// false (default): p is the exact adjoint of the linearized cost, so L_u + F_u^T p is the

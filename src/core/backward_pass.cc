@@ -293,6 +293,12 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     auto phiz = phiz_.head(nz);
     auto phizz = phizz_.topLeftCorner(nz, nz);
     normalization_->SwitchingDerivatives(k, z, phiz, phizz);
+    if (settings_.psd_switching_hessians) {
+      const Matrix sym = 0.5 * (phizz + phizz.transpose());
+      Eigen::SelfAdjointEigenSolver<Matrix> eig(sym);
+      phizz = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
+              eig.eigenvectors().transpose();
+    }
     if (k == K_ - 1) {
       P_.topLeftCorner(nz, nz) = phizz;
       p_.head(nz) = phiz;

@@ -286,6 +286,31 @@ TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
   EXPECT_NE(pass.p(0, 0)(0), lyapunov.p(0, 0)(0));  // kRiccati changes p
 }
 
+TEST(BackwardPass, PsdSwitchingHessiansProjectsAnIndefiniteTerminalHessian) {
+  // Terminal weight s = -3 (indefinite Phi_zz): the option replaces it by its PSD projection,
+  // here 0, so P follows the closed form with s = 0; without the option, the one with s = -3.
+  ScalarLq negative;
+  negative.s = -3.0;
+  ScalarLq zero;
+  zero.s = 0.0;
+  const ScalarLqSetup setup{negative};
+  const Trajectory traj = setup.Exact(241);
+  BackwardPassSettings psd;
+  psd.psd_switching_hessians = true;
+  BackwardPass projected, exact;
+  projected.Allocate(setup.problem, 241, psd);
+  exact.Allocate(setup.problem, 241);
+  projected.Run(traj);
+  exact.Run(traj);
+  for (int j : {0, 120, 240}) {
+    const double t = traj.modes[0].t(j);
+    EXPECT_NEAR(projected.P(0, j)(0, 0), zero.P11(t), 1e-9 * (1 + std::abs(zero.P11(t))));
+    EXPECT_NEAR(exact.P(0, j)(0, 0), negative.P11(t), 1e-9 * (1 + std::abs(negative.P11(t))));
+    EXPECT_EQ(projected.p(0, j), exact.p(0, j));  // the gradient is untouched
+  }
+  EXPECT_GT(std::abs(exact.P(0, 240)(0, 0) - projected.P(0, 240)(0, 0)), 1.0);
+}
+
 TEST(BackwardPass, RunDoesNotAllocate) {
   ASSERT_TRUE(MallocCountingWorks());
   {
