@@ -266,6 +266,25 @@ int Run(int argc, char** argv) {
     return false;
   };
 
+#ifdef DDOC_HAVE_RENDER
+  Overlay overlay;
+  overlay.method = summary.method;
+  auto capture = [&]() {
+    if (!frames) return;
+    overlay.hop = controller->hop();
+    overlay.last_cost = last_cost;
+    overlay.forward_speed = last_speed;
+    frames->MaybeCapture(m, d, overlay);  // throws std::runtime_error naming the file
+  };
+  try {
+    capture();  // frame 0 shows the start state
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ddoc-hopper: --render: %s\n", e.what());
+    plugin::Detach();
+    return kExitError;
+  }
+#endif
+
   while (!done()) {
     const double t = d->time;
     const double push = PushForce(s, t);
@@ -359,13 +378,13 @@ int Run(int argc, char** argv) {
     }
 
 #ifdef DDOC_HAVE_RENDER
-    if (frames) {
-      Overlay o;
-      o.method = summary.method;
-      o.hop = controller->hop();
-      o.last_cost = last_cost;
-      o.forward_speed = last_speed;
-      frames->MaybeCapture(m, d, o);
+    try {
+      capture();
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "\nddoc-hopper: --render: %s\n", e.what());
+      summary.fall_reason = std::string("render: ") + e.what();
+      exit_code = kExitError;
+      break;
     }
 #endif
 
