@@ -47,7 +47,11 @@ LearnerSettings HopperLearnerDefaults() {
   s.gamma = 0.5;
   s.reset_alpha_on_accept = false;
   s.controller.alpha_scales_feedback = false;
-  s.controller.regularization = 0.1;
+  s.controller.regularization = 0.01;
+  s.backward.equation = BackwardEquation::kRiccati;
+  s.backward.psd_switching_hessians = true;
+  s.alpha_initial = 0.01;
+  s.backward.riccati_regularization = s.controller.regularization;
   return s;
 }
 
@@ -92,11 +96,20 @@ void HopperController::Initialize() {
   positive(c.dt_model, "dt_model");
   positive(c.min_phase_time, "min_phase_time");
   positive(c.takeoff_force, "takeoff_force");
+  if (c.initial_hops < 1) {
+    throw InvalidArgument("config.initial_hops must be >= 1, got " +
+                          std::to_string(c.initial_hops));
+  }
   if (c.max_samples_per_mode < 10) {
     throw InvalidArgument("config.max_samples_per_mode must be >= 10, got " +
                           std::to_string(c.max_samples_per_mode));
   }
   problem_.Validate();  // duration bounds: reversed or non-positive -> named error
+  if (c.sync_riccati_regularization) {
+    for (LearnerSettings* ls : {&config_.learner, &config_.model_learner}) {
+      ls->backward.riccati_regularization = ls->controller.regularization;
+    }
+  }
 
   model_plant_.settings().dt = c.dt_model;
   model_plant_.set_guard([this](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
@@ -319,8 +332,14 @@ void HopperController::EndHop() {
     r.accepted = true;
     r.learner_cost = EvaluateCost(problem_, trial_).total;
     policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-  } else if (hop_ == 0) {
-    // Hop 0 ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
+  } else if (hop_ + 1 < config_.initial_hops) {
+    // Warm-up: the robot settles onto its own closed-loop cycle of the initial law.
+    cost_.SetReference(trial_.x0);
+    r.accepted = true;
+    r.learner_cost = EvaluateCost(problem_, trial_).total;
+    policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
+  } else if (hop_ + 1 == config_.initial_hops) {
+    // This hop ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
     if (config_.method == Method::kMrl) {
       Trajectory predicted;
       model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);

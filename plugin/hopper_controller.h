@@ -39,15 +39,22 @@ enum class Method {
   kMrl,   ///< direction from the model's prediction, line search on the measured cost
 };
 
-/// Algorithm 1 settings tuned for the hopper (see README "Learning on the hopper"):
+/// Algorithm 1 settings tuned for the hopper (see README "Learning on the hopper"; measured with
+/// tools/hop_experiment and ddoc-hopper at forward speed 0.5 m/s). Deviations from the paper:
+/// - backward.equation = kRiccati (P and p of the Riccati form, NOT the paper's Lyapunov-type
+///   (30)): the Lyapunov P ignores that the feedback itself changes the future, so every instant
+///   pushes the same way and the gain L_uu^-1 (L_uz + F_u^T P) overshoots. On the model closed
+///   loop (+0.05 m/s push, 100 hops) Lyapunov+mu 0.1 drifts away (cost 1.10 -> 13), Riccati+mu
+///   0.01 returns to the gait in ~10 hops and rejects +0.2 m/s and a -0.3 m/s push;
+/// - regularization 0.01 (mu of H = L_uu + mu I, same mu in the Riccati equation);
+/// - backward.psd_switching_hessians: the Riccati pass escapes to infinity when a hop with a
+///   large I1 residual makes Phi_zz indefinite (seen on the 8 kg robot);
+/// - alpha_initial = 0.01 and alpha multiplies the feed-forward only: a full (alpha = 1)
+///   feed-forward step saturates (bang-bang) and the robot falls within 2 hops; backtracking
+///   then converges to tracking the nominal with feedback instead of open-loop replay;
+/// - after an accepted trial alpha grows by 1/gamma (capped at alpha_initial);
 /// - c = 1e-7: (36) measures int |du|^2 in raw input units, where the stiffness commands span
-///   hundreds of N/m, so int |du|^2 is ~1e5 for a full step while the cost is ~1;
-/// - alpha multiplies the feed-forward only, so backtracking converges to tracking the nominal
-///   with feedback instead of replaying it open loop on an unstable robot;
-/// - regularization 0.1 of L_uu in (33): with R = 1e-2 diag(1, 1e-2, 1e-4, 1e-4) the raw
-///   feedback gain L_uu^-1 (L_uz + F_u^T P) is so large that the QP chatters between bounds and
-///   destabilizes the hop (measured on the model: see README);
-/// - after an accepted trial alpha grows by 1/gamma instead of restarting at 1.
+///   hundreds of N/m, so int |du|^2 is ~1e5 for a full step while the cost is ~1.
 LearnerSettings HopperLearnerDefaults();
 
 /// Configuration of the controller. Plain struct; every field has a default.
@@ -70,6 +77,17 @@ struct ControllerConfig {
   /// No phase change within this time after the previous one (s).
   double min_phase_time = 0.03;
   int max_samples_per_mode = 4000;    ///< preallocated samples per mode (1 ms steps)
+  /// Hops run with the initial law u^0, T^0 (OC-FB) before Algorithm 1 / mRL start; the last
+  /// of them is the measured trial of "Initialize" (I^0, x^0). 1 = Algorithm 1 as printed
+  /// (hop 0 initializes). More: hop 0 starts at the MODEL's gait state, which is not on the
+  /// robot's cycle, so its cost is not representative: on the exact 12 kg robot hop 0 costs
+  /// 1.1504 while the law's steady cycle costs 1.1596, and no later hop ever passes (36)
+  /// against hop 0. >= 1.
+  int initial_hops = 3;
+  /// true: Create sets backward.riccati_regularization = controller.regularization in both
+  /// learners, so that the Riccati gain and the controller's H = L_uu + mu I agree even when
+  /// only the controller's regularization is overridden (e.g. a scenario's <learning>).
+  bool sync_riccati_regularization = true;
 };
 
 /// What happened in one hop (one trial), measured on the robot.

@@ -54,14 +54,37 @@ const char* kUsage =
     "  --reg 0.1            OnlineControllerSettings::regularization (model solve and robot)\n"
     "  --riccati 0|1|2      BackwardPassSettings::equation: 0 kLyapunov (paper), 1 kRiccatiFeedback,\n"
     "                       2 kRiccati (mu = --reg)\n"
+            "  --stance-open-loop 0|1  experiment: nominal inputs in stance, feedback in flight only\n"
     "  --alpha-ff 0|1       alpha on the feed-forward only (1) or on all of b (0, the paper)\n"
     "  --ocfb-alpha 0       alpha of ConvergedPolicy\n"
-    "  --c 1e-7 --gamma 0.5 --grow 0|1   Algorithm 1 line search\n"
+    "  --c 1e-7 --gamma 0.5 --grow 0|1 --alpha0 1   Algorithm 1 line search\n"
     "  --reference own|nominal  x_ref of I1 for the learner on the plant\n"
     "  --model-M 10 --model-cd 0 --plant-M 10 --plant-cd 0\n"
     "  --pert 0.05          initial perturbation: xd += p, phi += p/5, phid += p\n"
     "  --push-hop -1 --push-dv 0   add dv to xd at the start of that hop\n"
     "  --floquet 0|1        return-map eigenvalues of the OC-FB law\n";
+
+// Experiment: the law of `inner` in flight, only the nominal inputs (open loop) in stance.
+class FlightFeedbackOnly : public Policy {
+ public:
+  FlightFeedbackOnly(Policy* inner, const Trajectory& nominal) : inner_(inner), open_(nominal) {}
+  void BeginTrial() override {
+    inner_->BeginTrial();
+    open_.BeginTrial();
+  }
+  double PlannedDuration(int k) const override { return inner_->PlannedDuration(k); }
+  void Step(int k, double t, const ConstVectorRef& x, VectorRef u) override {
+    if (k == 0) {
+      inner_->Step(k, t, x, u);
+    } else {
+      open_.Step(k, t, x, u);
+    }
+  }
+
+ private:
+  Policy* inner_;
+  OpenLoopPolicy open_;
+};
 
 }  // namespace
 
@@ -116,6 +139,8 @@ int main(int argc, char** argv) {
   LearnerSettings ls;
   ls.c = a.Get("c", 1e-7);
   ls.gamma = a.Get("gamma", 0.5);
+  ls.alpha_initial = a.Get("alpha0", 1.0);
+  ls.alpha_min = std::min(1e-6, 0.5 * ls.alpha_initial);
   ls.reset_alpha_on_accept = a.Get("grow", 1) == 0;
   ls.controller.alpha_scales_feedback = a.Get("alpha-ff", 1) == 0;
   ls.controller.regularization = a.Get("reg", 0.1);
@@ -178,8 +203,15 @@ int main(int argc, char** argv) {
     } else {
       pol = &learner->NextTrial();
     }
+    std::unique_ptr<FlightFeedbackOnly> wrap;
+    Policy* run = pol;
+    if (a.Get("stance-open-loop", 0) != 0) {
+      wrap = std::make_unique<FlightFeedbackOnly>(
+          pol, method == "ocfb" || hop == 0 ? ocfb.nominal() : learner->nominal());
+      run = wrap.get();
+    }
     try {
-      plant.Run(x0, *pol, &tr);
+      plant.Run(x0, *run, &tr);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "# hop %d: plant failed: %s\n", hop, e.what());
       break;
