@@ -119,6 +119,33 @@ TEST(ModelPlant, CustomGuard) {
   EXPECT_NEAR(traj.T(0), std::sqrt(2.0 / kG), 1e-8);
 }
 
+TEST(ModelPlant, OpenLoopPolicyReplaysARecordedTrialInNormalizedTime) {
+  Ball ball;
+  ModelPlantSettings s;
+  s.time_based_only = true;
+  ModelPlant plant(ball.problem, s);
+  FunctionPolicy original(Eigen::Vector2d(0.3, 0.25),
+                          [](int k, double tau, const ConstVectorRef&, VectorRef u) {
+                            u(0) = std::sin(3 * tau) + k;
+                          });
+  Trajectory first, replayed, stretched;
+  plant.Run(Eigen::Vector2d(1.0, 0.0), original, &first);
+  OpenLoopPolicy replay(first);
+  plant.Run(Eigen::Vector2d(1.0, 0.0), replay, &replayed);
+  ASSERT_EQ(replayed.total_samples(), first.total_samples());
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_LT((replayed.modes[k].u - first.modes[k].u).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((replayed.modes[k].x - first.modes[k].x).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  // With other planned switching instants the inputs follow tau, not t.
+  OpenLoopPolicy longer(first, Eigen::Vector2d(0.6, 0.85));
+  plant.Run(Eigen::Vector2d(1.0, 0.0), longer, &stretched);
+  EXPECT_NEAR(stretched.T(0), 0.6, 1e-12);
+  EXPECT_NEAR(stretched.T(1), 0.85, 1e-12);
+  const int N = stretched.modes[0].num_samples();
+  EXPECT_NEAR(stretched.modes[0].u(0, N / 2), std::sin(3 * stretched.Tau(0, N / 2)), 1e-4);
+}
+
 TEST(ModelPlant, RejectsBadInput) {
   Ball ball;
   ModelPlant plant(ball.problem);
