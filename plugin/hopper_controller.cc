@@ -133,6 +133,8 @@ void HopperController::Initialize() {
     throw InvalidArgument("the model-based initial solve produced a non-finite cost");
   }
   recorder_.Reserve(model_, config_.max_samples_per_mode);
+  phase_psi_.setZero(config_.max_samples_per_mode);
+  phase_s_.setZero(config_.max_samples_per_mode);
 }
 
 void HopperController::Reset(const mjModel* m, mjData* d) {
@@ -206,7 +208,54 @@ void HopperController::Compute(const mjModel* m, mjData* d) {
   in_compute_ = false;
 }
 
+double HopperController::LegPhase(double r, double rd) const {
+  return std::atan2(config_.model.r0 - r, -rd / phase_w_);
+}
+
+void HopperController::LoadPhaseTable() {
+  const bool learning = learner_ && config_.method != Method::kOcfb && hop_ >= config_.initial_hops;
+  const Trajectory& nominal = learning ? learner_->nominal() : model_learner_->nominal();
+  const ModeTrajectory& fl = nominal.modes[hopper::kFlight];
+  const ModeTrajectory& st = nominal.modes[hopper::kStance];
+  phase_y_td_ = fl.x(hopper::kY, fl.num_samples() - 1);
+  const double D = nominal.T(1) - nominal.T(0);
+  phase_w_ = D > 0 ? M_PI / D : 1.0;
+  phase_count_ = std::min<int>(st.num_samples(), static_cast<int>(phase_psi_.size()));
+  double run = -1e9;
+  for (int j = 0; j < phase_count_; ++j) {
+    run = std::max(run, LegPhase(st.x(hopper::kSR, j), st.x(hopper::kSRd, j)));
+    phase_psi_(j) = run;
+    phase_s_(j) = D > 0 ? (st.t(j) - nominal.T(0)) / D : 0.0;
+  }
+  phase_best_ = -1e9;
+}
+
+double HopperController::PolicyTime(double t_in_mode, const double* x) {
+  const double D = policy_->PlannedDuration(mode_);
+  if (!std::isfinite(t_in_mode)) return t_in_mode;
+  if (mode_ == hopper::kFlight) {
+    const double y = x[hopper::kY], yd = x[hopper::kYd];
+    const double g = config_.model.g;
+    const double rem = (yd + std::sqrt(yd * yd + 2.0 * g * std::max(0.0, y - phase_y_td_))) / g;
+    if (!std::isfinite(rem) || t_in_mode + rem <= 0) return t_in_mode;
+    return D * t_in_mode / (t_in_mode + rem);
+  }
+  const double psi = LegPhase(x[hopper::kSR], x[hopper::kSRd]);
+  if (!std::isfinite(psi) || phase_count_ < 2) return t_in_mode;
+  phase_best_ = std::max(phase_best_, psi);
+  if (phase_best_ <= phase_psi_(0)) return 0.0;
+  for (int j = 1; j < phase_count_; ++j) {
+    if (phase_psi_(j) >= phase_best_) {
+      const double span = phase_psi_(j) - phase_psi_(j - 1);
+      const double w = span > 0 ? (phase_best_ - phase_psi_(j - 1)) / span : 1.0;
+      return D * (phase_s_(j - 1) + w * (phase_s_(j) - phase_s_(j - 1)));
+    }
+  }
+  return D;  // past the nominal's takeoff phase
+}
+
 void HopperController::BeginHop(double t, const mjData* d) {
+  if (config_.phase_time) LoadPhaseTable();
   MapFlightState(map_, d, vsa_.state(), xf_.data());
   recorder_.Clear();
   recorder_.BeginMode(hopper::kFlight);
@@ -252,6 +301,7 @@ void HopperController::NewStep(const mjModel* m, mjData* d) {
     phase_start_ = t;
     last_event_ = t;
     stance_first_ = true;
+    phase_best_ = -1e9;
   } else if (mode_ == hopper::kStance && may_switch &&
              d->qfrc_constraint[map_.dof_z] < config_.takeoff_force) {
     EndHop();
@@ -280,7 +330,8 @@ void HopperController::NewStep(const mjModel* m, mjData* d) {
 
   // Online update (33)-(35): the policy clamps into the bounds and never returns NaN for a
   // non-finite state; Sanitize() is the last guard.
-  policy_->Step(mode_, t - phase_start_, xm, u_);
+  const double t_in_mode = t - phase_start_;
+  policy_->Step(mode_, config_.phase_time ? PolicyTime(t_in_mode, x) : t_in_mode, xm, u_);
   Sanitize();
   effort_ += cost_.InputCost(u_) * std::max(step, map_.timestep);
 

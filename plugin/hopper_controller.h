@@ -88,6 +88,21 @@ struct ControllerConfig {
   /// learners, so that the Riccati gain and the controller's H = L_uu + mu I agree even when
   /// only the controller's regularization is overridden (e.g. a scenario's <learning>).
   bool sync_riccati_regularization = true;
+  /// How the controller's normalized time tau of (12) is computed on the robot (the recorded
+  /// trajectory keeps the measured clock either way):
+  ///   false (the paper, Policy::NormalizedTime): tau = k + clamp(t_in_mode / D_k, 0, 1);
+  ///   true (NOT the paper): phase-based. Flight: t_in_mode / (t_in_mode + t_rem), t_rem the
+  ///   ballistic time until the COM reaches the nominal's touchdown height (so tau = 1 at the
+  ///   measured touchdown, whatever the flight lasts). Stance: the leg-spring phase
+  ///   psi = atan2(r0 - r, -rd / w) (0 at touchdown, pi/2 at maximum compression, pi at
+  ///   takeoff), kept monotone, looked up in the same phase of the nominal's stance samples.
+  /// Clock-based tau compares a 12 kg robot's longer stance with the 10 kg model's shorter one
+  /// at the same tau, and the feedback fights the difference. Measured: on the analytic model
+  /// (tools/hop_experiment --stance-phase 1 --flight-phase 1) it lets OC-FB survive a 11 kg plant
+  /// (100 hops vs 8-10) and a 12 kg plant for 32 hops (vs 5); on MuJoCo at 0.5 m/s it is WORSE
+  /// (exact 8 kg Algorithm 1 falls at hop 27, inexact 8 kg at hop 11; inexact 12 kg OC-FB 11
+  /// hops vs 6), hence off by default.
+  bool phase_time = false;
 };
 
 /// What happened in one hop (one trial), measured on the robot.
@@ -172,6 +187,9 @@ class HopperController {
   void EndHop();                         // takeoff: offline part for the next hop
   void WriteHeld(const mjModel* m, mjData* d);
   void Sanitize();                       // u_ finite and inside the bounds
+  void LoadPhaseTable();                 // from the running law's nominal (no allocation)
+  double PolicyTime(double t_in_mode, const double* x);  // config.phase_time mapping
+  double LegPhase(double r, double rd) const;
 
   ControllerConfig config_;
   HopperMapping map_;
@@ -218,6 +236,12 @@ class HopperController {
   std::string error_;
   long nonfinite_steps_ = 0;
   int hop_nonfinite_ = 0;
+  // Phase-based time (config.phase_time): the nominal's stance phase table of the running hop.
+  Vector phase_psi_, phase_s_;  // max_samples_per_mode: monotone psi and stance progress s
+  int phase_count_ = 0;         // used entries
+  double phase_w_ = 1.0;        // w = pi / nominal stance duration, rad/s
+  double phase_y_td_ = 0.0;     // nominal COM height at touchdown, m
+  double phase_best_ = 0.0;     // largest measured psi so far in this stance
 };
 
 /// Holds a controller for the scope's lifetime (see HopperController::set_hold).

@@ -255,6 +255,29 @@ TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
   EXPECT_EQ(rig.c().hop(), 3);
 }
 
+TEST(HopperControllerTest, PhaseTimeKeepsInputsInBoundsAndHops) {
+  // The phase-based time mapping (config.phase_time) changes only the controller's tau: the
+  // robot keeps hopping for a few hops, inputs stay in the bounds, and the recorded hop times
+  // are the measured ones (T2 of a report equals its takeoff minus its start).
+  ControllerConfig config;
+  config.phase_time = true;
+  Rig rig("hopper_m12.xml", config);
+  ASSERT_TRUE(rig.ok());
+  std::vector<HopReport> reports;
+  while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
+    rig.Step();
+    ExpectInputInBounds(rig.c());
+    for (const HopReport& r : rig.c().TakeReports()) reports.push_back(r);
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  ASSERT_EQ(reports.size(), 3u);
+  for (const HopReport& r : reports) {
+    EXPECT_NEAR(r.t2, r.t_end - r.t_start, 1e-9);
+    EXPECT_GT(r.t1, 0.1);
+    EXPECT_GT(r.apex, 0.7);
+  }
+}
+
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the exact model for a few hops: the learner must accept at least one trial,
   // and the nominal cost it keeps must drop below the cost of the initial hop (u^0, T^0), i.e.

@@ -55,6 +55,8 @@ const char* kUsage =
     "  --riccati 0|1|2      BackwardPassSettings::equation: 0 kLyapunov (paper), 1 kRiccatiFeedback,\n"
     "                       2 kRiccati (mu = --reg)\n"
             "  --stance-open-loop 0|1  experiment: nominal inputs in stance, feedback in flight only\n"
+    "  --stance-phase 0|1   experiment: stance tau from the leg spring phase, not the clock\n"
+    "  --flight-phase 0|1   experiment: flight tau = t / (t + ballistic time to the nominal TD height)\n"
     "  --alpha-ff 0|1       alpha on the feed-forward only (1) or on all of b (0, the paper)\n"
     "  --ocfb-alpha 0       alpha of ConvergedPolicy\n"
     "  --c 1e-7 --gamma 0.5 --grow 0|1 --alpha0 1   Algorithm 1 line search\n"
@@ -84,6 +86,81 @@ class FlightFeedbackOnly : public Policy {
  private:
   Policy* inner_;
   OpenLoopPolicy open_;
+};
+
+// Experiment: stance time from the leg's spring phase instead of the clock. The phase
+// psi = atan2(r0 - r, -rd / w) (0 at touchdown, pi/2 at maximum compression, pi at takeoff for a
+// spring-mass stance) is tabulated along the nominal's stance samples; the measured psi (kept
+// monotone) is looked up in that table and gives the normalized stance progress, which is passed
+// to the inner policy as the time since touchdown. Flight keeps the clock.
+class StancePhaseTime : public Policy {
+ public:
+  StancePhaseTime(Policy* inner, const Trajectory& nominal, double r0, bool stance, bool flight,
+                  double g)
+      : inner_(inner), r0_(r0), stance_(stance), flight_(flight), g_(g) {
+    const ModeTrajectory& fl = nominal.modes[0];
+    y_td_ = fl.x(hopper::kY, fl.num_samples() - 1);
+    const ModeTrajectory& st = nominal.modes[1];
+    const int N = st.num_samples();
+    const double D = nominal.T(1) - nominal.T(0);
+    w_ = M_PI / D;
+    psi_.resize(N);
+    s_.resize(N);
+    double run = -1e9;
+    for (int j = 0; j < N; ++j) {
+      run = std::max(run, Psi(st.x(hopper::kSR, j), st.x(hopper::kSRd, j)));
+      psi_(j) = run;
+      s_(j) = (st.t(j) - nominal.T(0)) / D;
+    }
+  }
+  void BeginTrial() override {
+    inner_->BeginTrial();
+    best_ = -1e9;
+  }
+  double PlannedDuration(int k) const override { return inner_->PlannedDuration(k); }
+  void Step(int k, double t, const ConstVectorRef& x, VectorRef u) override {
+    if (k == 0) {
+      if (!flight_) {
+        inner_->Step(k, t, x, u);
+        return;
+      }
+      // Ballistic prediction of the remaining flight time to the nominal touchdown height.
+      const double y = x(hopper::kY), yd = x(hopper::kYd);
+      const double disc = yd * yd + 2 * g_ * std::max(0.0, y - y_td_);
+      const double rem = (yd + std::sqrt(disc)) / g_;
+      const double frac = t + rem > 0 ? t / (t + rem) : 1.0;
+      inner_->Step(k, frac * inner_->PlannedDuration(k), x, u);
+      return;
+    }
+    if (!stance_) {
+      inner_->Step(k, t, x, u);
+      return;
+    }
+    best_ = std::max(best_, Psi(x(hopper::kSR), x(hopper::kSRd)));
+    const int N = static_cast<int>(psi_.size());
+    double s = 1.0;
+    if (best_ <= psi_(0)) {
+      s = 0.0;
+    } else {
+      for (int j = 1; j < N; ++j) {
+        if (psi_(j) >= best_) {
+          const double span = psi_(j) - psi_(j - 1);
+          const double w = span > 0 ? (best_ - psi_(j - 1)) / span : 1.0;
+          s = s_(j - 1) + w * (s_(j) - s_(j - 1));
+          break;
+        }
+      }
+    }
+    inner_->Step(k, s * inner_->PlannedDuration(k), x, u);
+  }
+
+ private:
+  double Psi(double r, double rd) const { return std::atan2(r0_ - r, -rd / w_); }
+  Policy* inner_;
+  double r0_;
+  bool stance_, flight_;
+  double g_, y_td_ = 0, w_ = 1, best_ = 0;
+  Vector psi_, s_;
 };
 
 }  // namespace
@@ -147,6 +224,7 @@ int main(int argc, char** argv) {
   const int riccati = static_cast<int>(a.Get("riccati", 0));
   if (riccati == 1) ls.backward.equation = BackwardEquation::kRiccatiFeedback;
   if (riccati == 2) ls.backward.equation = BackwardEquation::kRiccati;
+  ls.backward.psd_switching_hessians = a.Get("psd", 1) != 0;
   ls.backward.riccati_regularization = ls.controller.regularization;
   ls.max_trials = std::max(1, static_cast<int>(a.Get("solve-trials", 50)));
   const bool solve = a.Get("solve-trials", 50) > 0;
@@ -204,10 +282,17 @@ int main(int argc, char** argv) {
       pol = &learner->NextTrial();
     }
     std::unique_ptr<FlightFeedbackOnly> wrap;
+    std::unique_ptr<StancePhaseTime> phase;
     Policy* run = pol;
+    if (a.Get("stance-phase", 0) != 0 || a.Get("flight-phase", 0) != 0) {
+      phase = std::make_unique<StancePhaseTime>(
+          pol, method == "ocfb" || hop == 0 ? ocfb.nominal() : learner->nominal(), mp.r0,
+          a.Get("stance-phase", 0) != 0, a.Get("flight-phase", 0) != 0, mp.g);
+      run = phase.get();
+    }
     if (a.Get("stance-open-loop", 0) != 0) {
       wrap = std::make_unique<FlightFeedbackOnly>(
-          pol, method == "ocfb" || hop == 0 ? ocfb.nominal() : learner->nominal());
+          run, method == "ocfb" || hop == 0 ? ocfb.nominal() : learner->nominal());
       run = wrap.get();
     }
     try {
