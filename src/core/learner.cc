@@ -172,7 +172,17 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.alpha = alpha_;
   r.cost = r.breakdown.total;
   r.nominal_cost = nominal_cost_;
-  r.decrease = r.cost - nominal_cost_;
+  r.expected_nominal_cost = nominal_cost_;
+  if (settings_.initial_state_correction && measured.x0.size() == nominal_.x0.size()) {
+    // Second-order prediction of the nominal's cost from the trial's initial state.
+    const Eigen::Index n0 = nominal_.x0.size();
+    const Vector dx0 = measured.x0 - nominal_.x0;
+    const auto P = pass_.P(0, 0);
+    const auto p = pass_.p(0, 0);
+    r.expected_nominal_cost += p.head(n0).dot(dx0) +
+                               0.5 * dx0.dot(P.topLeftCorner(n0, n0) * dx0);
+  }
+  r.decrease = r.cost - r.expected_nominal_cost;
   const Vector dT = measured.T - nominal_.T;
   r.step = InputDistance(measured, nominal_) + dT.squaredNorm();
   trial_pending_ = false;

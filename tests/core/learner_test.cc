@@ -257,6 +257,42 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   EXPECT_DOUBLE_EQ(other.alpha(), TestSettings().gamma);
 }
 
+TEST(Learner, InitialStateCorrectionPredictsTheNominalCostFromAnotherStart) {
+  // Linear dynamics, quadratic cost, the nominal inputs replayed (alpha ~ 0, paper convention):
+  // the cost from x0 + d is exactly quadratic in d with gradient p_1(0) and Hessian P_11(0), so
+  // the corrected decrease is ~0 while the plain one is the full cost difference.
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setConstant(0.3); });
+  Trajectory measured, nominal;
+  plant.Run(lq.x0, initial, &nominal);
+  const Eigen::Vector2d x1 = lq.x0 + Eigen::Vector2d(0.2, -0.3);
+  for (bool correct : {false, true}) {
+    LearnerSettings settings = TestSettings();
+    settings.alpha_initial = 1e-12;
+    settings.alpha_min = 1e-13;
+    settings.controller.alpha_scales_feedback = true;
+    settings.initial_state_correction = correct;
+    Learner learner(p.problem, settings);
+    learner.Initialize(nominal);
+    OnlineController& policy = learner.NextTrial();
+    plant.Run(x1, policy, &measured);
+    const double cost1 = EvaluateCost(p.problem, measured).total;
+    const TrialResult r = learner.CompleteTrial(measured);
+    EXPECT_NEAR(r.cost, cost1, 1e-12);
+    if (correct) {
+      EXPECT_NEAR(r.decrease, 0.0, 1e-4 * std::abs(cost1 - r.nominal_cost));
+      EXPECT_NEAR(r.expected_nominal_cost, cost1, 1e-6 * cost1);
+    } else {
+      EXPECT_DOUBLE_EQ(r.expected_nominal_cost, r.nominal_cost);
+      EXPECT_DOUBLE_EQ(r.decrease, cost1 - r.nominal_cost);
+      EXPECT_GT(std::abs(r.decrease), 0.05);
+    }
+  }
+}
+
 TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   TwoModeLq lq;
   LqProblem p(lq);
