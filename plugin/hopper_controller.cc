@@ -391,10 +391,10 @@ void HopperController::EndHop() {
     policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
   } else if (hop_ + 1 == config_.initial_hops) {
     // This hop ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
+    cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
     if (config_.method == Method::kMrl) {
       Trajectory predicted;
       model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);
-      cost_.SetReference(trial_.x0);
       learner_->Initialize(trial_, &predicted);
     } else {
       learner_->Initialize(trial_);
@@ -404,7 +404,7 @@ void HopperController::EndHop() {
     r.status = learner_->status();
     policy_ = &learner_->NextTrial();
   } else {
-    cost_.SetReference(trial_.x0);
+    cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
     const TrialResult tr = learner_->CompleteTrial(
         trial_, config_.method == Method::kMrl ? &model_plant_ : nullptr);
     r.accepted = tr.accepted;
