@@ -131,17 +131,17 @@ class BackwardPass {
  private:
   // Coefficients of (30) at one point of the grid (sized for n_max; top blocks used).
   struct Coefficients {
-    Matrix A;    // n_max x nz_max: top n rows of F_z (the bottom K rows are zero)
+    Matrix A;    // nz_max x nz_max: F_z; only the top n rows are used (the bottom K are zero)
     Matrix Q;    // nz_max x nz_max: L_zz
     Vector Lz;   // nz_max
-    Matrix B;    // n_max x m: top n rows of F_u
+    Matrix B;    // nz_max x m: F_u; only the top n rows are used
     Matrix Lzu;  // nz_max x m
     Matrix Luz;  // m x nz_max
     Vector Lu;   // m
     Matrix Luu;  // m x m
     Vector du;   // m: previous control variation (0 unless use_previous_du)
     Matrix LuuInv;  // m x m: (L_uu + mu I)^{-1} (Riccati variants only)
-    void Allocate(int n_max, int nz_max, int m);
+    void Allocate(int nz_max, int m);
   };
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev, Coefficients* c);
   void Interpolate(int n, int nz, const Coefficients& a, const Coefficients& b, Coefficients* c);
@@ -150,6 +150,12 @@ class BackwardPass {
                   const ConstVectorRef& p, MatrixRef dP, VectorRef dp);
   void Step(int n, int nz, double h, const Coefficients& hi, const Coefficients& lo,
             MatrixRef P, VectorRef p);
+  // kLyapunov: the same RK4/midpoint step as Step on P_, p_, with the stages fused (one
+  // product P(:, 0:n) A per stage, one pass forming dP and the next stage's P).
+  void LyapunovStep(int n, int nz, double h, const Coefficients& hi, const Coefficients& lo);
+  // dp/ds of the kLyapunov equation at stage (X, x).
+  void LyapunovDp(int n, int nz, const Coefficients& c, const ConstMatrixRef& X,
+                  const ConstVectorRef& x, VectorRef dp);
   void StoreOutputs(int k, int j, const Coefficients& c);
 
   const Problem* problem_ = nullptr;
@@ -174,15 +180,13 @@ class BackwardPass {
   Matrix phizz_;          // nz_max x nz_max
   Matrix Gz_;             // nz_max x nz_max (rectangular top-left block used)
   Matrix tmp_;            // nz_max x nz_max
-  Matrix Fz_;             // nz_max x nz_max
-  Matrix Fu_;             // nz_max x m
   Matrix P_;              // nz_max x nz_max: current P
   Vector p_;              // nz_max: current p
   Matrix Ps_;             // stage P
   Vector ps_;             // stage p
   Matrix kP_[4];          // stage derivatives of P
   Vector kp_[4];          // stage derivatives of p
-  Matrix PA_;             // nz_max x nz_max
+  Matrix PA_;             // nz_max x nz_max: P(:, 0:n) F_z(0:n, :) of a stage
   Vector Bdu_;            // n_max
   Matrix M_;              // nz_max x m: P F_u + L_zu (Riccati variants)
   Matrix W_;              // nz_max x m: M H^{-1} (Riccati variants)

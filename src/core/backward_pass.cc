@@ -4,12 +4,79 @@
 #include <sstream>
 
 namespace ddoc {
+namespace {
 
-void BackwardPass::Coefficients::Allocate(int n_max, int nz_max, int m) {
-  A.setZero(n_max, nz_max);
+// Small dense product Y = X A (all column-major, leading dimensions ldx, lda, ldy), the hot
+// spot of the backward pass (one per RK4 stage). Eigen's general product packs both operands
+// and blocks for caches, which costs more than the arithmetic at the sizes here (n + K ~ 16-64,
+// everything in L1/L2); this register-blocked kernel needs no packing. It uses Eigen's SIMD
+// packets, so it is as wide as the build (SSE2 by default, AVX/AVX-512 with -march=native).
+// Each entry is the sum over l = 0..depth-1 in order, as in Eigen's product.
+using Packet = Eigen::internal::packet_traits<double>::type;
+constexpr int kPacket = Eigen::internal::packet_traits<double>::size;
+// Above this many rows Eigen's cache-blocked product is used instead.
+constexpr int kSmallProductMaxRows = 96;
+
+// Rows [0, NP * kPacket) and columns [0, NC) of Y.
+template <int NP, int NC>
+inline void ProductTile(int depth, const double* X, int ldx, const double* A, int lda, double* Y,
+                        int ldy) {
+  using Eigen::internal::pmadd;
+  using Eigen::internal::ploadu;
+  using Eigen::internal::pset1;
+  Packet acc[NP][NC];
+  for (int p = 0; p < NP; ++p) {
+    for (int c = 0; c < NC; ++c) acc[p][c] = pset1<Packet>(0.0);
+  }
+  for (int l = 0; l < depth; ++l) {
+    Packet x[NP];
+    for (int p = 0; p < NP; ++p) x[p] = ploadu<Packet>(X + l * ldx + p * kPacket);
+    for (int c = 0; c < NC; ++c) {
+      const Packet a = pset1<Packet>(A[c * lda + l]);
+      for (int p = 0; p < NP; ++p) acc[p][c] = pmadd(x[p], a, acc[p][c]);
+    }
+  }
+  for (int p = 0; p < NP; ++p) {
+    for (int c = 0; c < NC; ++c) Eigen::internal::pstoreu(Y + c * ldy + p * kPacket, acc[p][c]);
+  }
+}
+
+// Columns [0, NC) of Y, all `rows` rows.
+template <int NC>
+inline void ProductPanel(int rows, int depth, const double* X, int ldx, const double* A, int lda,
+                         double* Y, int ldy) {
+  int i = 0;
+  for (; i + 2 * kPacket <= rows; i += 2 * kPacket) {
+    ProductTile<2, NC>(depth, X + i, ldx, A, lda, Y + i, ldy);
+  }
+  for (; i + kPacket <= rows; i += kPacket) ProductTile<1, NC>(depth, X + i, ldx, A, lda, Y + i, ldy);
+  for (; i < rows; ++i) {
+    double acc[NC] = {};
+    for (int l = 0; l < depth; ++l) {
+      for (int c = 0; c < NC; ++c) acc[c] += X[l * ldx + i] * A[c * lda + l];
+    }
+    for (int c = 0; c < NC; ++c) Y[c * ldy + i] = acc[c];
+  }
+}
+
+// Y (rows x cols) = X (rows x depth) * A (depth x cols).
+void SmallProduct(int rows, int cols, int depth, const double* X, int ldx, const double* A,
+                  int lda, double* Y, int ldy) {
+  constexpr int kCols = 4;
+  int j = 0;
+  for (; j + kCols <= cols; j += kCols) {
+    ProductPanel<kCols>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+  }
+  for (; j < cols; ++j) ProductPanel<1>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+}
+
+}  // namespace
+
+void BackwardPass::Coefficients::Allocate(int nz_max, int m) {
+  A.setZero(nz_max, nz_max);
   Q.setZero(nz_max, nz_max);
   Lz.setZero(nz_max);
-  B.setZero(n_max, m);
+  B.setZero(nz_max, m);
   Lzu.setZero(nz_max, m);
   Luz.setZero(m, nz_max);
   Lu.setZero(m);
@@ -48,14 +115,12 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   gain_store_.setZero(m_ * nz_max_, max_samples);
   ff_store_.setZero(m_, max_samples);
   luu_store_.setZero(m_ * m_, max_samples);
-  for (auto& c : coef_) c.Allocate(n_max_, nz_max_, m_);
+  for (auto& c : coef_) c.Allocate(nz_max_, m_);
   z_.setZero(nz_max_);
   phiz_.setZero(nz_max_);
   phizz_.setZero(nz_max_, nz_max_);
   Gz_.setZero(nz_max_, nz_max_);
   tmp_.setZero(nz_max_, nz_max_);
-  Fz_.setZero(nz_max_, nz_max_);
-  Fu_.setZero(nz_max_, m_);
   P_.setZero(nz_max_, nz_max_);
   p_.setZero(nz_max_);
   Ps_.setZero(nz_max_, nz_max_);
@@ -102,14 +167,11 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   z.head(n) = nominal.modes[k].x.col(j);
   z.tail(K_) = nominal.T;
   const auto u = nominal.modes[k].u.col(j);
-  auto Fz = Fz_.topLeftCorner(nz, nz);
-  auto Fu = Fu_.topRows(nz);
-  normalization_->FlowDerivatives(k, z, u, Fz, Fu);
-  c->A.topLeftCorner(n, nz) = Fz.topRows(n);
-  c->B.topRows(n) = Fu.topRows(n);
+  normalization_->FlowDerivatives(k, z, u, c->A.topLeftCorner(nz, nz), c->B.topRows(nz));
   normalization_->RunningDerivatives(k, z, u, c->Lz.head(nz), c->Lu, c->Q.topLeftCorner(nz, nz),
                                      c->Luu, c->Luz.leftCols(nz));
-  c->Lzu.topRows(nz) = c->Luz.leftCols(nz).transpose();
+  // L_zu is only read by the du_prev term and the Riccati variants.
+  if (settings_.use_previous_du || riccati()) c->Lzu.topRows(nz) = c->Luz.leftCols(nz).transpose();
   if (settings_.use_previous_du && du_prev != nullptr) {
     c->du = du_prev->col(index(k, j));
   } else {
@@ -219,6 +281,96 @@ void BackwardPass::Step(int n, int nz, double h, const Coefficients& hi, const C
   p += (h / 6.0) * (k1p + 2.0 * k2p + 2.0 * k3p + k4p);
 }
 
+void BackwardPass::LyapunovDp(int n, int nz, const Coefficients& c, const ConstMatrixRef& X,
+                              const ConstVectorRef& x, VectorRef dp) {
+  dp = c.Lz.head(nz);
+  dp.noalias() += c.A.topLeftCorner(n, nz).transpose() * x.head(n);
+  if (settings_.use_previous_du) {
+    auto Bdu = Bdu_.head(n);
+    Bdu.noalias() = c.B.topRows(n) * c.du;
+    dp.noalias() += X.leftCols(n) * Bdu;
+    dp.noalias() += c.Lzu.topRows(nz) * c.du;
+  }
+}
+
+void BackwardPass::LyapunovStep(int n, int nz, double h, const Coefficients& hi,
+                                const Coefficients& lo) {
+  // Stage s of RK4 (hi, mid, mid, lo) or the midpoint rule (hi, mid) evaluates
+  //   k_s = X_s A_s + (X_s A_s)^T + Q_s   (A_s = top n rows of F_z, so X_s A_s = X_s(:, 0:n) A_s)
+  // at X_1 = P, X_2 = P + h/2 k_1, X_3 = P + h/2 k_2, X_4 = P + h k_3 (midpoint: X_2, then
+  // P += h k_2) and P += h/6 (k_1 + 2 k_2 + 2 k_3 + k_4), in the operation order of Step.
+  // One pass per stage forms k_s from the product Y = X_s(:, 0:n) A_s, accumulates it and
+  // writes the next X; k_s is never stored.
+  Coefficients& mid = coef_[2];
+  Interpolate(n, nz, hi, lo, &mid);
+  const bool rk4 = settings_.integrator == BackwardIntegrator::kRk4;
+  const int stages = rk4 ? 4 : 2;
+  const Coefficients* coef[4] = {&hi, &mid, &mid, &lo};
+  const int ld = nz_max_;
+  double* P = P_.data();      // nz x nz (leading dimension ld): P, updated at the last stage
+  double* X = Ps_.data();     // nz x nz: X_s for s >= 2
+  double* Y = PA_.data();     // nz x nz: X_s(:, 0:n) A_s
+  double* acc = kP_[0].data();  // nz x nz: k_1 + 2 k_2 + 2 k_3 (RK4)
+  auto p = p_.head(nz);
+  auto ps = ps_.head(nz);
+  for (int s = 0; s < stages; ++s) {
+    const Coefficients& c = *coef[s];
+    const double* Xs = s == 0 ? P : X;
+    if (nz <= kSmallProductMaxRows) {
+      SmallProduct(nz, nz, n, Xs, ld, c.A.data(), static_cast<int>(c.A.rows()), Y, ld);
+    } else if (s == 0) {
+      PA_.topLeftCorner(nz, nz).noalias() = P_.topLeftCorner(nz, n) * c.A.topLeftCorner(n, nz);
+    } else {
+      PA_.topLeftCorner(nz, nz).noalias() = Ps_.topLeftCorner(nz, n) * c.A.topLeftCorner(n, nz);
+    }
+    // p: the same stages with dp/ds = A^T p + L_z (+ du_prev term).
+    auto dp = kp_[s].head(nz);
+    if (s == 0) {
+      LyapunovDp(n, nz, c, P_.topLeftCorner(nz, nz), p, dp);
+    } else {
+      LyapunovDp(n, nz, c, Ps_.topLeftCorner(nz, nz), ps, dp);
+    }
+    const double* Q = c.Q.data();
+    const int ldq = static_cast<int>(c.Q.rows());
+    const bool last = s == stages - 1;
+    // Weight of k_s in the next stage point: h/2, h/2, h (RK4) or h/2 (midpoint).
+    const double a = (rk4 && s == 2) ? h : 0.5 * h;
+    for (int col = 0; col < nz; ++col) {
+      const double* Yc = Y + col * ld;
+      const double* Yr = Y + col;  // row `col` of Y, stride ld
+      const double* Qc = Q + col * ldq;
+      double* Pc = P + col * ld;
+      double* Xc = X + col * ld;
+      double* Ac = acc + col * ld;
+      if (!rk4 && last) {
+        for (int r = 0; r < nz; ++r) Pc[r] += h * ((Yc[r] + Yr[r * ld]) + Qc[r]);
+      } else if (!rk4 || s == 0) {
+        for (int r = 0; r < nz; ++r) {
+          const double v = (Yc[r] + Yr[r * ld]) + Qc[r];
+          Ac[r] = v;
+          Xc[r] = Pc[r] + a * v;
+        }
+      } else if (!last) {
+        for (int r = 0; r < nz; ++r) {
+          const double v = (Yc[r] + Yr[r * ld]) + Qc[r];
+          Ac[r] = Ac[r] + 2.0 * v;
+          Xc[r] = Pc[r] + a * v;
+        }
+      } else {
+        const double w = h / 6.0;
+        for (int r = 0; r < nz; ++r) Pc[r] += w * (Ac[r] + ((Yc[r] + Yr[r * ld]) + Qc[r]));
+      }
+    }
+    if (!last) {
+      ps = p + a * dp;
+    } else if (rk4) {
+      p += (h / 6.0) * (kp_[0].head(nz) + 2.0 * kp_[1].head(nz) + 2.0 * kp_[2].head(nz) + dp);
+    } else {
+      p += h * dp;
+    }
+  }
+}
+
 void BackwardPass::StoreOutputs(int k, int j, const Coefficients& c) {
   const int n = dims_[k];
   const int nz = n + K_;
@@ -321,7 +473,13 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     for (int j = N - 2; j >= 0; --j) {
       Evaluate(k, nominal, j, du_prev, lo);
       const double h = tau_(offsets_[k] + j + 1) - tau_(offsets_[k] + j);
-      if (h > 0) Step(n, nz, h, *hi, *lo, P_.topLeftCorner(nz, nz), p_.head(nz));
+      if (h > 0) {
+        if (riccati()) {
+          Step(n, nz, h, *hi, *lo, P_.topLeftCorner(nz, nz), p_.head(nz));
+        } else {
+          LyapunovStep(n, nz, h, *hi, *lo);
+        }
+      }
       StoreOutputs(k, j, *lo);
       std::swap(hi, lo);
     }
