@@ -50,7 +50,7 @@ LearnerSettings HopperLearnerDefaults() {
   s.controller.regularization = 0.01;
   s.backward.equation = BackwardEquation::kRiccati;
   s.backward.psd_switching_hessians = true;
-  s.alpha_initial = 0.01;
+  s.alpha_initial = 0.1;
   s.backward.riccati_regularization = s.controller.regularization;
   return s;
 }
