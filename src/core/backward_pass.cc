@@ -3,6 +3,10 @@
 
 #include <sstream>
 
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#include <immintrin.h>
+#endif
+
 namespace ddoc {
 namespace {
 
@@ -59,9 +63,79 @@ inline void ProductPanel(int rows, int depth, const double* X, int ldx, const do
   }
 }
 
+#if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)) && !defined(__AVX2__) && \
+    !defined(EIGEN_DONT_VECTORIZE)
+// The default build targets SSE2 (2 doubles per instruction, no FMA). On CPUs with AVX2 and
+// FMA the same kernel with 4-wide fused multiply-adds runs ~2.5x faster; it is selected at run
+// time (no build flag needed). Results differ from the SSE2 kernel only by the rounding of
+// the fused multiply-add. Builds with -march=native (DDOC_NATIVE) use the Eigen-packet kernel
+// at the native width instead.
+#define DDOC_BACKWARD_PASS_AVX2_DISPATCH 1
+
+template <int NP, int NC>
+__attribute__((target("avx2,fma"))) inline void ProductTileAvx2(int depth, const double* X,
+                                                                 int ldx, const double* A,
+                                                                 int lda, double* Y, int ldy) {
+  __m256d acc[NP][NC];
+  for (int p = 0; p < NP; ++p) {
+    for (int c = 0; c < NC; ++c) acc[p][c] = _mm256_setzero_pd();
+  }
+  for (int l = 0; l < depth; ++l) {
+    __m256d x[NP];
+    for (int p = 0; p < NP; ++p) x[p] = _mm256_loadu_pd(X + l * ldx + 4 * p);
+    for (int c = 0; c < NC; ++c) {
+      const __m256d a = _mm256_broadcast_sd(A + c * lda + l);
+      for (int p = 0; p < NP; ++p) acc[p][c] = _mm256_fmadd_pd(x[p], a, acc[p][c]);
+    }
+  }
+  for (int p = 0; p < NP; ++p) {
+    for (int c = 0; c < NC; ++c) _mm256_storeu_pd(Y + c * ldy + 4 * p, acc[p][c]);
+  }
+}
+
+template <int NC>
+__attribute__((target("avx2,fma"))) inline void ProductPanelAvx2(int rows, int depth,
+                                                                  const double* X, int ldx,
+                                                                  const double* A, int lda,
+                                                                  double* Y, int ldy) {
+  int i = 0;
+  for (; i + 8 <= rows; i += 8) ProductTileAvx2<2, NC>(depth, X + i, ldx, A, lda, Y + i, ldy);
+  for (; i + 4 <= rows; i += 4) ProductTileAvx2<1, NC>(depth, X + i, ldx, A, lda, Y + i, ldy);
+  for (; i < rows; ++i) {
+    double acc[NC] = {};
+    for (int l = 0; l < depth; ++l) {
+      for (int c = 0; c < NC; ++c) acc[c] += X[l * ldx + i] * A[c * lda + l];
+    }
+    for (int c = 0; c < NC; ++c) Y[c * ldy + i] = acc[c];
+  }
+}
+
+__attribute__((target("avx2,fma"))) void SmallProductAvx2(int rows, int cols, int depth,
+                                                           const double* X, int ldx,
+                                                           const double* A, int lda, double* Y,
+                                                           int ldy) {
+  int j = 0;
+  for (; j + 4 <= cols; j += 4) {
+    ProductPanelAvx2<4>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+  }
+  for (; j < cols; ++j) ProductPanelAvx2<1>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+}
+
+bool HasAvx2Fma() {
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return has;
+}
+#endif
+
 // Y (rows x cols) = X (rows x depth) * A (depth x cols).
 void SmallProduct(int rows, int cols, int depth, const double* X, int ldx, const double* A,
                   int lda, double* Y, int ldy) {
+#ifdef DDOC_BACKWARD_PASS_AVX2_DISPATCH
+  if (HasAvx2Fma()) {
+    SmallProductAvx2(rows, cols, depth, X, ldx, A, lda, Y, ldy);
+    return;
+  }
+#endif
   constexpr int kCols = 4;
   int j = 0;
   for (; j + kCols <= cols; j += kCols) {
@@ -284,7 +358,8 @@ void BackwardPass::Step(int n, int nz, double h, const Coefficients& hi, const C
 void BackwardPass::LyapunovDp(int n, int nz, const Coefficients& c, const ConstMatrixRef& X,
                               const ConstVectorRef& x, VectorRef dp) {
   dp = c.Lz.head(nz);
-  dp.noalias() += c.A.topLeftCorner(n, nz).transpose() * x.head(n);
+  // Coefficient-wise (nz dot products of length n): cheaper than Eigen's GEMV at these sizes.
+  dp.noalias() += c.A.topLeftCorner(n, nz).transpose().lazyProduct(x.head(n));
   if (settings_.use_previous_du) {
     auto Bdu = Bdu_.head(n);
     Bdu.noalias() = c.B.topRows(n) * c.du;
@@ -381,7 +456,8 @@ void BackwardPass::StoreOutputs(int k, int j, const Coefficients& c) {
   pout = p_.head(nz);
   Eigen::Map<Matrix> gain(gain_store_.col(s).data(), m_, nz);
   gain = c.Luz.leftCols(nz);
-  gain.noalias() += c.B.topRows(n).transpose() * P_.topLeftCorner(n, nz);
+  // m x nz dot products of length n (Eigen's GEMM would pack both operands first).
+  gain.noalias() += c.B.topRows(n).transpose().lazyProduct(P_.topLeftCorner(n, nz));
   auto ff = ff_store_.col(s);
   ff = c.Lu;
   ff.noalias() += c.B.topRows(n).transpose() * p_.head(n);
