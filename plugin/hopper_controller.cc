@@ -394,7 +394,7 @@ void HopperController::EndHop() {
     cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
     if (config_.method == Method::kMrl) {
       Trajectory predicted;
-      model_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);
+      mrl_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);
       learner_->Initialize(trial_, &predicted);
     } else {
       learner_->Initialize(trial_);
@@ -406,7 +406,7 @@ void HopperController::EndHop() {
   } else {
     cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
     const TrialResult tr = learner_->CompleteTrial(
-        trial_, config_.method == Method::kMrl ? &model_plant_ : nullptr);
+        trial_, config_.method == Method::kMrl ? &mrl_plant_ : nullptr);
     r.accepted = tr.accepted;
     r.learner_cost = tr.cost;
     r.status = tr.status;
@@ -415,6 +415,12 @@ void HopperController::EndHop() {
   policy_->BeginTrial();
   reports_.push_back(r);
   ++hop_;
+}
+
+void MeasuredStartModelPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) {
+  x0_ = x0;
+  if (x0_.size() == hopper::kFlightDim) x0_(hopper::kRd) = 0.0;
+  model_->Run(x0_, policy, out);
 }
 
 void Attach(HopperController* controller) {

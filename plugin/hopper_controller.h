@@ -137,6 +137,22 @@ struct HopReport {
   int nonfinite = 0;           ///< steps with a non-finite measured state in this hop
 };
 
+/// mRL's direction plant: the analytic model run from the measured initial state, with the
+/// flight leg-length rate set to 0 first. The model's massless leg has rd = 0 after takeoff
+/// (takeoff map) and rdd = 0 in flight; MuJoCo's measured rd in flight is the oscillation of the
+/// 2 g foot on the leg spring (about 1 m/s peak at takeoff), which the model would read as a leg
+/// that keeps extending, so that the foot never leaves the floor in the prediction (measured: the
+/// predicted flight ended at its minimum duration, 0.05 s, instead of 0.26 s).
+class MeasuredStartModelPlant : public Plant {
+ public:
+  explicit MeasuredStartModelPlant(ModelPlant* model) : model_(model) {}
+  void Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) override;
+
+ private:
+  ModelPlant* model_;
+  Vector x0_;  // n_0: the projected start state
+};
+
 /// The controller. Not thread-safe; one instance per mjData.
 class HopperController {
  public:
@@ -207,6 +223,7 @@ class HopperController {
   HopperCost cost_;
   Problem problem_;
   ModelPlant model_plant_;
+  MeasuredStartModelPlant mrl_plant_{&model_plant_};  // mRL's direction plant
   NominalGait gait_;
   std::unique_ptr<Learner> model_learner_;  // OC-FB on the model
   std::unique_ptr<Learner> learner_;        // Algorithm 1 / mRL on the robot
