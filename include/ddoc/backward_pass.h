@@ -188,6 +188,7 @@ class BackwardPass {
   Vector kp_[4];          // stage derivatives of p
   Matrix PA_;             // nz_max x nz_max: P(:, 0:n) F_z(0:n, :) of a stage
   Vector Bdu_;            // n_max
+  Matrix Bt_;             // m x n_max: F_u(0:n, :)^T of the stored sample
   Matrix M_;              // nz_max x m: P F_u + L_zu (Riccati variants)
   Matrix W_;              // nz_max x m: M H^{-1} (Riccati variants)
   Vector r_;              // m: L_u + F_u^T p (kRiccati)

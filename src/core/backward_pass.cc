@@ -64,12 +64,14 @@ inline void ProductPanel(int rows, int depth, const double* X, int ldx, const do
 }
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)) && !defined(__AVX2__) && \
+    !defined(DDOC_BACKWARD_PASS_NO_DISPATCH) && \
     !defined(EIGEN_DONT_VECTORIZE)
 // The default build targets SSE2 (2 doubles per instruction, no FMA). On CPUs with AVX2 and
 // FMA the same kernel with 4-wide fused multiply-adds runs ~2.5x faster; it is selected at run
 // time (no build flag needed). Results differ from the SSE2 kernel only by the rounding of
 // the fused multiply-add. Builds with -march=native (DDOC_NATIVE) use the Eigen-packet kernel
-// at the native width instead.
+// at the native width instead; -DDDOC_BACKWARD_PASS_NO_DISPATCH forces the SSE2 path (used
+// to test it on AVX2 machines).
 #define DDOC_BACKWARD_PASS_AVX2_DISPATCH 1
 
 template <int NP, int NC>
@@ -119,6 +121,7 @@ __attribute__((target("avx2,fma"))) void SmallProductAvx2(int rows, int cols, in
     ProductPanelAvx2<4>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
   }
   for (; j < cols; ++j) ProductPanelAvx2<1>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+  _mm256_zeroupper();
 }
 
 bool HasAvx2Fma() {
@@ -142,6 +145,133 @@ void SmallProduct(int rows, int cols, int depth, const double* X, int ldx, const
     ProductPanel<kCols>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
   }
   for (; j < cols; ++j) ProductPanel<1>(rows, depth, X, ldx, A + j * lda, lda, Y + j * ldy, ldy);
+}
+
+// The fused pass of one integrator stage over P, X, acc (nz x nz, leading dimension ld):
+//   v = k_s = (Y + Y^T) + Q, then by kind
+//   kFirst:        acc = v,           X = P + a v
+//   kMiddle:       acc = acc + 2 v,   X = P + a v
+//   kLastRk4:      P = P + h/6 (acc + v)
+//   kLastMidpoint: P = P + h v
+enum class StageKind { kFirst, kMiddle, kLastRk4, kLastMidpoint };
+
+struct StagePass {
+  const double* Y;  // nz x nz, leading dimension ld: X_s(:, 0:n) A_s
+  const double* Q;  // nz x nz, leading dimension ldq: L_zz at the stage
+  double* P;        // nz x nz, leading dimension ld
+  double* X;        // nz x nz, leading dimension ld: next stage point
+  double* acc;      // nz x nz, leading dimension ld
+  int ld, ldq;
+  double a, h;
+};
+
+// Rows [r0, r1) x columns [c0, c1), scalar.
+template <StageKind kKind>
+void StagePassScalar(const StagePass& s, int r0, int r1, int c0, int c1) {
+  const double w = s.h / 6.0;
+  const double a = s.a;
+  const double h = s.h;
+  const int ld = s.ld;
+  for (int col = c0; col < c1; ++col) {
+    const double* Yc = s.Y + col * ld;
+    const double* Yr = s.Y + col;  // row `col` of Y, stride ld
+    const double* Qc = s.Q + col * s.ldq;
+    double* Pc = s.P + col * ld;
+    double* Xc = s.X + col * ld;
+    double* Ac = s.acc + col * ld;
+    for (int r = r0; r < r1; ++r) {
+      const double v = (Yc[r] + Yr[r * ld]) + Qc[r];
+      if (kKind == StageKind::kFirst) {
+        Ac[r] = v;
+        Xc[r] = Pc[r] + a * v;
+      } else if (kKind == StageKind::kMiddle) {
+        Ac[r] = Ac[r] + 2.0 * v;
+        Xc[r] = Pc[r] + a * v;
+      } else if (kKind == StageKind::kLastRk4) {
+        Pc[r] += w * (Ac[r] + v);
+      } else {
+        Pc[r] += h * v;
+      }
+    }
+  }
+}
+
+#ifdef DDOC_BACKWARD_PASS_AVX2_DISPATCH
+// 4 x 4 tiles with in-register transposes of the mirrored tile of Y (the compiler may fuse
+// the multiply-adds, so results can differ from StagePassScalar's by rounding).
+template <StageKind kKind>
+__attribute__((target("avx2,fma"))) void StagePassAvx2(const StagePass& s, int nz) {
+  const int nz4 = nz & ~3;
+  const __m256d a = _mm256_set1_pd(s.a);
+  const __m256d two = _mm256_set1_pd(2.0);
+  const __m256d w = _mm256_set1_pd(s.h / 6.0);
+  const __m256d h = _mm256_set1_pd(s.h);
+  // Locals, so that the stores below need not be assumed to modify `s`.
+  const int ld = s.ld;
+  const int ldq = s.ldq;
+  const double* const Y = s.Y;
+  const double* const Q = s.Q;
+  double* const P = s.P;
+  double* const X = s.X;
+  double* const acc = s.acc;
+  for (int cb = 0; cb < nz4; cb += 4) {
+    for (int rb = 0; rb < nz4; rb += 4) {
+      // t_i = Y(cb:cb+4, rb+i); tt_c = Y(cb+c, rb:rb+4) = Y^T(rb:rb+4, cb+c).
+      const __m256d t0 = _mm256_loadu_pd(Y + (rb + 0) * ld + cb);
+      const __m256d t1 = _mm256_loadu_pd(Y + (rb + 1) * ld + cb);
+      const __m256d t2 = _mm256_loadu_pd(Y + (rb + 2) * ld + cb);
+      const __m256d t3 = _mm256_loadu_pd(Y + (rb + 3) * ld + cb);
+      const __m256d u0 = _mm256_unpacklo_pd(t0, t1);
+      const __m256d u1 = _mm256_unpackhi_pd(t0, t1);
+      const __m256d u2 = _mm256_unpacklo_pd(t2, t3);
+      const __m256d u3 = _mm256_unpackhi_pd(t2, t3);
+      __m256d tt[4];
+      tt[0] = _mm256_permute2f128_pd(u0, u2, 0x20);
+      tt[1] = _mm256_permute2f128_pd(u1, u3, 0x20);
+      tt[2] = _mm256_permute2f128_pd(u0, u2, 0x31);
+      tt[3] = _mm256_permute2f128_pd(u1, u3, 0x31);
+      for (int c = 0; c < 4; ++c) {
+        const int col = cb + c;
+        const __m256d y = _mm256_loadu_pd(Y + col * ld + rb);
+        const __m256d q = _mm256_loadu_pd(Q + col * ldq + rb);
+        const __m256d v = _mm256_add_pd(_mm256_add_pd(y, tt[c]), q);
+        double* Pc = P + col * ld + rb;
+        double* Xc = X + col * ld + rb;
+        double* Ac = acc + col * ld + rb;
+        if (kKind == StageKind::kFirst) {
+          _mm256_storeu_pd(Ac, v);
+          _mm256_storeu_pd(Xc, _mm256_add_pd(_mm256_loadu_pd(Pc), _mm256_mul_pd(a, v)));
+        } else if (kKind == StageKind::kMiddle) {
+          _mm256_storeu_pd(Ac, _mm256_add_pd(_mm256_loadu_pd(Ac), _mm256_mul_pd(two, v)));
+          _mm256_storeu_pd(Xc, _mm256_add_pd(_mm256_loadu_pd(Pc), _mm256_mul_pd(a, v)));
+        } else if (kKind == StageKind::kLastRk4) {
+          const __m256d sum = _mm256_add_pd(_mm256_loadu_pd(Ac), v);
+          _mm256_storeu_pd(Pc, _mm256_add_pd(_mm256_loadu_pd(Pc), _mm256_mul_pd(w, sum)));
+        } else {
+          _mm256_storeu_pd(Pc, _mm256_add_pd(_mm256_loadu_pd(Pc), _mm256_mul_pd(h, v)));
+        }
+      }
+    }
+  }
+  // Clear the upper halves before returning to SSE code (the compiler does not always insert
+  // this; dirty upper halves slow down all later SSE instructions on some CPUs).
+  _mm256_zeroupper();
+}
+#endif
+
+template <StageKind kKind>
+void RunStagePass(const StagePass& s, int nz) {
+#ifdef DDOC_BACKWARD_PASS_AVX2_DISPATCH
+  if (HasAvx2Fma()) {
+    StagePassAvx2<kKind>(s, nz);
+    // The rim (rows or columns beyond the last multiple of 4).
+    const int nz4 = nz & ~3;
+    StagePassScalar<kKind>(s, nz4, nz, 0, nz);
+    StagePassScalar<kKind>(s, 0, nz4, nz4, nz);
+    return;
+  }
+#endif
+  StagePassScalar<kKind>(s, 0, nz, 0, nz);
 }
 
 }  // namespace
@@ -205,6 +335,7 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   }
   PA_.setZero(nz_max_, nz_max_);
   Bdu_.setZero(n_max_);
+  Bt_.setZero(m_, n_max_);
   M_.setZero(nz_max_, m_);
   W_.setZero(nz_max_, m_);
   r_.setZero(m_);
@@ -405,36 +536,20 @@ void BackwardPass::LyapunovStep(int n, int nz, double h, const Coefficients& hi,
     } else {
       LyapunovDp(n, nz, c, Ps_.topLeftCorner(nz, nz), ps, dp);
     }
-    const double* Q = c.Q.data();
-    const int ldq = static_cast<int>(c.Q.rows());
     const bool last = s == stages - 1;
     // Weight of k_s in the next stage point: h/2, h/2, h (RK4) or h/2 (midpoint).
     const double a = (rk4 && s == 2) ? h : 0.5 * h;
-    for (int col = 0; col < nz; ++col) {
-      const double* Yc = Y + col * ld;
-      const double* Yr = Y + col;  // row `col` of Y, stride ld
-      const double* Qc = Q + col * ldq;
-      double* Pc = P + col * ld;
-      double* Xc = X + col * ld;
-      double* Ac = acc + col * ld;
-      if (!rk4 && last) {
-        for (int r = 0; r < nz; ++r) Pc[r] += h * ((Yc[r] + Yr[r * ld]) + Qc[r]);
-      } else if (!rk4 || s == 0) {
-        for (int r = 0; r < nz; ++r) {
-          const double v = (Yc[r] + Yr[r * ld]) + Qc[r];
-          Ac[r] = v;
-          Xc[r] = Pc[r] + a * v;
-        }
-      } else if (!last) {
-        for (int r = 0; r < nz; ++r) {
-          const double v = (Yc[r] + Yr[r * ld]) + Qc[r];
-          Ac[r] = Ac[r] + 2.0 * v;
-          Xc[r] = Pc[r] + a * v;
-        }
+    const StagePass pass{Y, c.Q.data(), P, X, acc, ld, static_cast<int>(c.Q.rows()), a, h};
+    if (!last) {
+      if (s == 0) {
+        RunStagePass<StageKind::kFirst>(pass, nz);
       } else {
-        const double w = h / 6.0;
-        for (int r = 0; r < nz; ++r) Pc[r] += w * (Ac[r] + ((Yc[r] + Yr[r * ld]) + Qc[r]));
+        RunStagePass<StageKind::kMiddle>(pass, nz);
       }
+    } else if (rk4) {
+      RunStagePass<StageKind::kLastRk4>(pass, nz);
+    } else {
+      RunStagePass<StageKind::kLastMidpoint>(pass, nz);
     }
     if (!last) {
       ps = p + a * dp;
@@ -455,9 +570,11 @@ void BackwardPass::StoreOutputs(int k, int j, const Coefficients& c) {
   Pout = P_.topLeftCorner(nz, nz);
   pout = p_.head(nz);
   Eigen::Map<Matrix> gain(gain_store_.col(s).data(), m_, nz);
-  gain = c.Luz.leftCols(nz);
-  // m x nz dot products of length n (Eigen's GEMM would pack both operands first).
-  gain.noalias() += c.B.topRows(n).transpose().lazyProduct(P_.topLeftCorner(n, nz));
+  // gain = F_u^T P + L_uz = (F_u(0:n, :)^T) P(0:n, :) + L_uz, with the small-product kernel.
+  auto Bt = Bt_.leftCols(n);
+  Bt = c.B.topRows(n).transpose();
+  SmallProduct(m_, nz, n, Bt.data(), m_, P_.data(), nz_max_, gain.data(), m_);
+  gain += c.Luz.leftCols(nz);
   auto ff = ff_store_.col(s);
   ff = c.Lu;
   ff.noalias() += c.B.topRows(n).transpose() * p_.head(n);
