@@ -673,6 +673,13 @@ def result_row(run, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0):
         conv = converged_hop(h, eps, delta_i)
         conv_src = "computed"
     row["converged_hop"], row["converged_src"] = conv, conv_src
+    row["stopped_hop"] = run.summary.get("stopped_hop")
+    # Learning trials are the hops run with alpha > 0 (warm-up hops and OC-FB run alpha = 0).
+    learned = (h["accepted"] > 0) & (h["alpha"] > 0) if n else []
+    row["accepted"] = (int(np.count_nonzero(learned))
+                       if run.summary.get("learner_status", "") != "none" and run.method != "ocfb"
+                       else None)
+    row["tail_cost"] = float(np.nanmean(h["cost"][-20:])) if n else None
     row["final_cost"] = float(h["cost"][-1]) if n else None
     row["I4"], row["I4_at"] = None, None
     if n:
@@ -708,13 +715,15 @@ def results_markdown(runs, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0, fai
     (path, message) of run directories that could not be read."""
     lines = [
         "| scenario | method | status | hops | final cost | I4 | mean speed [m/s] | mean T2 [s] "
-        "| mean step [m] | converged at hop |",
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| mean step [m] | mean cost, last 20 hops | accepted trials | converged at hop |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     notes = []
     for run in sorted(runs, key=_order_key):
         r = result_row(run, eps, delta_i, tail)
         conv = "not converged" if r["converged_hop"] is None else str(r["converged_hop"])
+        if r["converged_hop"] is None and isinstance(r.get("stopped_hop"), int):
+            conv = f"line search ended at hop {r['stopped_hop']}"
         if r["converged_src"] == "computed" and r["converged_hop"] is not None:
             conv += "*"
         i4 = _fmt(r["I4"], ".3g") + (f" ({r['I4_at']})" if r["I4"] is not None else "")
@@ -725,7 +734,9 @@ def results_markdown(runs, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0, fai
                          f"{r['summary_hops']}.")
         lines.append(f"| {r['scenario']} | {r['method']} | {_status(r)} | {hops} "
                      f"| {_fmt(r['final_cost'], '.4g')} | {i4} | {_fmt(r['mean_speed'], '.3f')} "
-                     f"| {_fmt(r['mean_period'], '.3f')} | {_fmt(r['mean_step'], '.3f')} | {conv} |")
+                     f"| {_fmt(r['mean_period'], '.3f')} | {_fmt(r['mean_step'], '.3f')} "
+                     f"| {_fmt(r['tail_cost'], '.4g')} "
+                     f"| {'-' if r['accepted'] is None else r['accepted']} | {conv} |")
     for path, msg in failed:
         name = os.path.basename(os.path.normpath(path))
         sc, me = _split_name(name)

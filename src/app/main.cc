@@ -41,6 +41,16 @@ struct FallLimits {
   double max_phase = 3.0;      // a flight or stance phase longer than this, s (stalled)
 };
 
+const char* LearnerStatusName(LearnerStatus status) {
+  switch (status) {
+    case LearnerStatus::kRunning: return "running";
+    case LearnerStatus::kConverged: return "converged";
+    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
+    case LearnerStatus::kMaxTrials: return "max_trials";
+  }
+  return "?";
+}
+
 plugin::Method ToPluginMethod(Method m) {
   switch (m) {
     case Method::kAlg1: return plugin::Method::kAlg1;
@@ -359,6 +369,10 @@ int Run(int argc, char** argv) {
       if (summary.converged_hop < 0 && h.status == LearnerStatus::kConverged) {
         summary.converged_hop = h.hop;
       }
+      if (summary.stopped_hop < 0 && h.status == LearnerStatus::kLineSearchFailed) {
+        summary.stopped_hop = h.hop;
+      }
+      summary.learner_status = s.method == Method::kOcfb ? "none" : LearnerStatusName(h.status);
       speed_sum += h.speed;
       period_sum += h.t2;
       ++tail_count;

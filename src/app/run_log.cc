@@ -114,6 +114,12 @@ void RunLog::WriteSummary(const Summary& s) {
   } else {
     std::fprintf(f, "  \"converged_hop\": null,\n");
   }
+  if (s.stopped_hop >= 0) {
+    std::fprintf(f, "  \"stopped_hop\": %d,\n", s.stopped_hop);
+  } else {
+    std::fprintf(f, "  \"stopped_hop\": null,\n");
+  }
+  std::fprintf(f, "  \"learner_status\": \"%s\",\n", JsonEscape(s.learner_status).c_str());
   std::fprintf(f, "  \"final_cost\": %s,\n", JsonNumber(s.final_cost).c_str());
   std::fprintf(f, "  \"final_I4\": %s,\n", JsonNumber(s.final_i4).c_str());
   std::fprintf(f, "  \"mean_speed\": %s,\n", JsonNumber(s.mean_speed).c_str());

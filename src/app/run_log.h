@@ -55,6 +55,8 @@ struct Summary {
   bool fell = false;
   std::string fall_reason;
   int converged_hop = -1;    // -1: not converged
+  int stopped_hop = -1;      // hop after which the line search gave up (alpha < alpha_min); -1: never
+  std::string learner_status = "running";  // running | converged | line_search_failed | none
   double final_cost = 0.0, final_i4 = 0.0, mean_speed = 0.0, mean_period = 0.0;
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
