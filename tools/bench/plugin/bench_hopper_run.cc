@@ -20,7 +20,7 @@ using ddoc::plugin::HopperController;
 
 constexpr int kHops = 100;
 constexpr double kMaxSeconds = 80.0;  // upper bound of simulated time per run
-const std::string kRobot = std::string(DDOC_SOURCE_DIR) + "/models/hopper_m12.xml";
+const std::string kRobot = std::string(DDOC_SOURCE_DIR) + "/models/hopper_m8.xml";  // the default scenario's robot
 
 struct Robot {
   ddoc::MjModelPtr model = ddoc::LoadMjcf(kRobot);
@@ -28,7 +28,7 @@ struct Robot {
 };
 
 std::unique_ptr<HopperController> MakeController(const mjModel* m) {
-  ddoc::plugin::ControllerConfig config;  // inexact model: 10 kg, no drag
+  ddoc::plugin::ControllerConfig config;  // inexact model: 10 kg, no drag (default scenario)
   config.gait.forward_speed = 0.5;
   std::string error;
   auto c = HopperController::Create(m, config, &error);
