@@ -40,6 +40,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
                "alpha_min must be in [0, alpha_initial)");
   CheckSetting(settings.epsilon > 0, "epsilon must be > 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
+  CheckSetting(settings.nonmonotone_memory >= 1, "nonmonotone_memory must be >= 1");
+  CheckSetting(settings.rebaseline_after >= 0, "rebaseline_after must be >= 0");
   CheckSetting(settings.max_trials >= 1, "max_trials must be >= 1");
   CheckSetting(settings.max_samples >= 2, "max_samples must be >= 2");
   pass_.Allocate(problem, settings.max_samples, settings.backward);
@@ -57,6 +59,11 @@ void Learner::AcceptNominal(const Trajectory& direction, double cost) {
   previous_nominal_ = std::move(nominal_);
   nominal_ = direction;
   nominal_cost_ = cost;
+  cost_memory_.push_back(cost);
+  const size_t memory = static_cast<size_t>(settings_.nonmonotone_memory);
+  if (cost_memory_.size() > memory) {
+    cost_memory_.erase(cost_memory_.begin(), cost_memory_.end() - memory);
+  }
   pass_.Run(nominal_, du);
 }
 
@@ -66,6 +73,8 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
     throw InvalidArgument("Learner::Initialize: the initial trial has a non-finite cost");
   }
   initialized_ = false;
+  cost_memory_.clear();
+  rejections_ = 0;
   AcceptNominal(direction ? *direction : measured, cost.total);
   initialized_ = true;
   alpha_ = settings_.alpha_initial;
@@ -144,6 +153,7 @@ TrialResult Learner::AbortTrial() {
   r.nominal_cost = nominal_cost_;
   r.decrease = r.cost;
   trial_pending_ = false;
+  ++rejections_;
   if (status_ != LearnerStatus::kLineSearchFailed) {
     alpha_ *= settings_.gamma;
     if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
@@ -172,7 +182,8 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.alpha = alpha_;
   r.cost = r.breakdown.total;
   r.nominal_cost = nominal_cost_;
-  r.expected_nominal_cost = nominal_cost_;
+  // (36) reference: I^i, or with a non-monotone memory the largest of the remembered costs.
+  r.expected_nominal_cost = *std::max_element(cost_memory_.begin(), cost_memory_.end());
   if (settings_.initial_state_correction && measured.x0.size() == nominal_.x0.size()) {
     // Second-order prediction of the nominal's cost from the trial's initial state.
     const Eigen::Index n0 = nominal_.x0.size();
@@ -193,6 +204,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   }
   r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step;
   if (r.accepted) {
+    rejections_ = 0;
     if (direction_plant != nullptr) {
       Trajectory direction;
       direction_plant->Run(measured.x0, controllers_[active_], &direction);
@@ -214,8 +226,25 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     }
     status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
   } else {
+    ++rejections_;
     alpha_ *= settings_.gamma;
     if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
+    if (settings_.rebaseline_after > 0 && rejections_ >= settings_.rebaseline_after &&
+        std::isfinite(r.cost) && status_ == LearnerStatus::kRunning) {
+      // Restart Algorithm 1 from this trial: it is the new x^i with its measured cost.
+      cost_memory_.clear();
+      if (direction_plant != nullptr) {
+        Trajectory direction;
+        direction_plant->Run(measured.x0, controllers_[active_], &direction);
+        AcceptNominal(direction, r.cost);
+      } else {
+        AcceptNominal(measured, r.cost);
+      }
+      accepted_ = active_;
+      active_ = 1 - active_;
+      rejections_ = 0;
+      r.rebaselined = true;
+    }
   }
   r.iteration = iteration_;
   r.status = status_;

@@ -293,6 +293,88 @@ TEST(Learner, InitialStateCorrectionPredictsTheNominalCostFromAnotherStart) {
   }
 }
 
+TEST(Learner, NonmonotoneMemoryComparesWithTheLargestRememberedCost) {
+  // Trials are data: CompleteTrial accepts any measured trajectory. Nominal costs c0 (u = 0
+  // from x0) and c1 < c0 (the learner's first trial); then a u = 0 run from s x0 whose cost is
+  // (c0 + c1) / 2: (36) as printed rejects it (it is worse than c1), a memory of 2 accepts it.
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy zero(Eigen::Vector2d(1.0, 1.0),
+                      [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  Trajectory run0, run_origin;
+  plant.Run(lq.x0, zero, &run0);
+  plant.Run(Eigen::Vector2d::Zero(), zero, &run_origin);
+  const double c0 = EvaluateCost(p.problem, run0).total;
+  const double rho = EvaluateCost(p.problem, run_origin).total;  // duration terms only
+  for (int memory : {1, 2}) {
+    LearnerSettings settings = TestSettings();
+    settings.c = 1e-12;
+    settings.nonmonotone_memory = memory;
+    Learner learner(p.problem, settings);
+    learner.Initialize(run0);
+    Trajectory trial1, trial2;
+    plant.Run(lq.x0, learner.NextTrial(), &trial1);
+    const TrialResult r1 = learner.CompleteTrial(trial1);
+    ASSERT_TRUE(r1.accepted);
+    const double c1 = r1.cost;
+    ASSERT_LT(c1, c0 - 0.01);
+    // u = 0 from s x0: cost rho + s^2 (c0 - rho) (linear dynamics, same durations).
+    const double s = std::sqrt((0.5 * (c0 + c1) - rho) / (c0 - rho));
+    learner.NextTrial();
+    plant.Run(s * lq.x0, zero, &trial2);
+    const TrialResult r2 = learner.CompleteTrial(trial2);
+    EXPECT_NEAR(r2.cost, 0.5 * (c0 + c1), 1e-9 * c0);
+    if (memory == 1) {
+      EXPECT_FALSE(r2.accepted);
+      EXPECT_DOUBLE_EQ(r2.expected_nominal_cost, c1);
+    } else {
+      EXPECT_TRUE(r2.accepted);
+      EXPECT_DOUBLE_EQ(r2.expected_nominal_cost, c0);
+      EXPECT_DOUBLE_EQ(learner.nominal_cost(), r2.cost);
+    }
+  }
+  LearnerSettings bad = TestSettings();
+  bad.nonmonotone_memory = 0;
+  EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
+}
+
+TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  LearnerSettings settings = TestSettings();
+  settings.c = 1e6;  // every trial is rejected
+  settings.rebaseline_after = 2;
+  Learner learner(p.problem, settings);
+  Trajectory measured;
+  plant.Run(lq.x0, initial, &measured);
+  learner.Initialize(measured);
+  const double cost0 = learner.nominal_cost();
+  const Eigen::Vector2d x1(1.3, -0.4);  // a different start: a different cost
+  for (int i = 1; i <= 4; ++i) {
+    plant.Run(x1, learner.NextTrial(), &measured);
+    const double before = learner.nominal_cost();
+    const TrialResult r = learner.CompleteTrial(measured);
+    EXPECT_FALSE(r.accepted);
+    EXPECT_EQ(r.rebaselined, i % 2 == 0) << "trial " << i;
+    if (i % 2 == 0) {
+      EXPECT_EQ(learner.nominal_cost(), r.cost);
+      EXPECT_NE(r.cost, cost0);
+      EXPECT_LT((learner.nominal().x0 - x1).norm(), 1e-12);
+    } else {
+      EXPECT_EQ(learner.nominal_cost(), before);
+    }
+    EXPECT_EQ(learner.iteration(), 0);
+    EXPECT_DOUBLE_EQ(learner.alpha(), std::pow(settings.gamma, i));  // alpha is kept
+  }
+  LearnerSettings bad = TestSettings();
+  bad.rebaseline_after = -1;
+  EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
+}
+
 TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   TwoModeLq lq;
   LqProblem p(lq);
