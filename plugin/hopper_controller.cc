@@ -59,7 +59,7 @@ HopperController::HopperController(const mjModel* m, const ControllerConfig& con
     : config_(config),
       map_(HopperMapping::Build(m, "the robot's mjModel")),
       model_(config.model),
-      cost_(model_),
+      cost_(model_, config.cost_weights),
       problem_{&model_, &cost_, HopperBounds(config),
                Eigen::Vector2d(cost_.weights().surface_weight, 0.0)},
       model_plant_(problem_),
@@ -257,6 +257,7 @@ double HopperController::PolicyTime(double t_in_mode, const double* x) {
 void HopperController::BeginHop(double t, const mjData* d) {
   if (config_.phase_time) LoadPhaseTable();
   MapFlightState(map_, d, vsa_.state(), xf_.data());
+  if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
   recorder_.Clear();
   recorder_.BeginMode(hopper::kFlight);
   hop_start_ = t;
@@ -290,6 +291,7 @@ void HopperController::NewStep(const mjModel* m, mjData* d) {
   if (mode_ == hopper::kFlight && may_switch &&
       FootTouches(map_, d, config_.touchdown_distance)) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
+    if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
     recorder_.AddSample(t - hop_start_, xf_, u_);  // x^-(T1)
     recorder_.EndMode();
     recorder_.BeginMode(hopper::kStance);
@@ -314,6 +316,7 @@ void HopperController::NewStep(const mjModel* m, mjData* d) {
   int n = 0;
   if (mode_ == hopper::kFlight) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
+    if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
     x = xf_.data();
     n = hopper::kFlightDim;
     apex_ = std::max(apex_, xf_(hopper::kY));
