@@ -7,59 +7,12 @@
 
 #include "ddoc/box_qp.h"
 #include "malloc_counter.h"
+#include "test_util.h"
 
 namespace ddoc {
 namespace testing {
 namespace {
 
-double Objective(const Matrix& H, const Vector& g, const Vector& x) {
-  return 0.5 * x.dot(H * x) + g.dot(x);
-}
-
-// Brute force: every assignment of each variable to {lower, upper, free}; solve the free block,
-// keep the feasible point with the lowest objective.
-Vector BruteForce(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi) {
-  const int n = static_cast<int>(g.size());
-  int combos = 1;
-  for (int i = 0; i < n; ++i) combos *= 3;
-  Vector best;
-  double best_value = 1e300;
-  for (int c = 0; c < combos; ++c) {
-    Vector x = Vector::Zero(n);
-    std::vector<int> free_idx;
-    int code = c;
-    for (int i = 0; i < n; ++i) {
-      const int s = code % 3;
-      code /= 3;
-      if (s == 0) x(i) = lo(i);
-      if (s == 1) x(i) = hi(i);
-      if (s == 2) free_idx.push_back(i);
-    }
-    const int nf = static_cast<int>(free_idx.size());
-    if (nf > 0) {
-      Matrix Hff(nf, nf);
-      Vector rhs(nf);
-      for (int a = 0; a < nf; ++a) {
-        rhs(a) = -g(free_idx[a]);
-        for (int i = 0; i < n; ++i) {
-          bool is_free = false;
-          for (int f : free_idx) is_free |= (f == i);
-          if (!is_free) rhs(a) -= H(free_idx[a], i) * x(i);
-        }
-        for (int b = 0; b < nf; ++b) Hff(a, b) = H(free_idx[a], free_idx[b]);
-      }
-      const Vector xf = Hff.ldlt().solve(rhs);
-      for (int a = 0; a < nf; ++a) x(free_idx[a]) = xf(a);
-    }
-    bool feasible = true;
-    for (int i = 0; i < n; ++i) feasible &= x(i) >= lo(i) - 1e-12 && x(i) <= hi(i) + 1e-12;
-    if (feasible && Objective(H, g, x) < best_value) {
-      best_value = Objective(H, g, x);
-      best = x;
-    }
-  }
-  return best;
-}
 
 // KKT residual of a box QP: free components need grad = 0, lower-bound components grad >= 0,
 // upper-bound components grad <= 0.
@@ -114,7 +67,7 @@ TEST(BoxQP, MatchesBruteForceAndKkt) {
     BoxQP qp(8);
     Vector x = Vector::Zero(n);
     ASSERT_EQ(qp.Solve(c.H, c.g, c.lo, c.hi, x), BoxQPStatus::kConverged) << "trial " << trial;
-    const Vector ref = BruteForce(c.H, c.g, c.lo, c.hi);
+    const Vector ref = testing::BruteForceBoxQp(c.H, c.g, c.lo, c.hi);
     EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial;
     EXPECT_LT(KktResidual(c.H, c.g, c.lo, c.hi, x), 1e-9) << "trial " << trial;
     int active = 0;
@@ -153,7 +106,7 @@ TEST(BoxQP, WarmStartFromAnyPointAndFixedVariables) {
   Vector x = Vector::Zero(5);
   EXPECT_EQ(qp.Solve(c.H, c.g, lo, hi, x), BoxQPStatus::kConverged);
   EXPECT_EQ(x(2), 0.1);
-  EXPECT_LT((x - BruteForce(c.H, c.g, lo, hi)).norm(), 1e-8);
+  EXPECT_LT((x - testing::BruteForceBoxQp(c.H, c.g, lo, hi)).norm(), 1e-8);
 }
 
 TEST(BoxQP, ReportsIndefiniteHessianAndBadInput) {

@@ -11,6 +11,7 @@
 #include "ddoc/online_controller.h"
 #include "ddoc/plant.h"
 #include "malloc_counter.h"
+#include "test_util.h"
 #include "test_systems.h"
 
 namespace ddoc {
@@ -65,46 +66,6 @@ struct ControlSetup {
   }
 };
 
-// Brute-force box QP for m <= 4: enumerate active sets.
-Vector BruteBoxQp(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi) {
-  const int n = static_cast<int>(g.size());
-  int combos = 1;
-  for (int i = 0; i < n; ++i) combos *= 3;
-  Vector best;
-  double best_value = 1e300;
-  for (int c = 0; c < combos; ++c) {
-    Vector x = Vector::Zero(n);
-    std::vector<int> fr;
-    int code = c;
-    for (int i = 0; i < n; ++i, code /= 3) {
-      if (code % 3 == 0) x(i) = lo(i);
-      else if (code % 3 == 1) x(i) = hi(i);
-      else fr.push_back(i);
-    }
-    if (!fr.empty()) {
-      const int nf = static_cast<int>(fr.size());
-      Matrix Hf(nf, nf);
-      Vector r(nf);
-      for (int a = 0; a < nf; ++a) {
-        r(a) = -g(fr[a]);
-        for (int i = 0; i < n; ++i) {
-          if (std::find(fr.begin(), fr.end(), i) == fr.end()) r(a) -= H(fr[a], i) * x(i);
-        }
-        for (int b = 0; b < nf; ++b) Hf(a, b) = H(fr[a], fr[b]);
-      }
-      const Vector xf = Hf.ldlt().solve(r);
-      for (int a = 0; a < nf; ++a) x(fr[a]) = xf(a);
-    }
-    bool ok = true;
-    for (int i = 0; i < n; ++i) ok &= x(i) >= lo(i) - 1e-12 && x(i) <= hi(i) + 1e-12;
-    const double v = 0.5 * x.dot(H * x) + g.dot(x);
-    if (ok && v < best_value) {
-      best_value = v;
-      best = x;
-    }
-  }
-  return best;
-}
 
 TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
   ControlSetup s(3);
@@ -133,7 +94,7 @@ TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
       dz << dx, dT;
       const Vector b = s.pass.Gain(k, j) * dz + s.pass.Feedforward(k, j);
       const Vector unom = s.nominal.modes[k].u.col(j);
-      const Vector du = BruteBoxQp(s.pass.Luu(k, j), alpha * b, s.problem.bounds.u_min - unom,
+      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * b, s.problem.bounds.u_min - unom,
                                    s.problem.bounds.u_max - unom);
       Vector u(3);
       ctrl.Step(k, t, x, u);

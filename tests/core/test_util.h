@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <vector>
 
 #include "ddoc/switched_system.h"
 
@@ -36,6 +37,58 @@ inline Vector Scalar(double v) {
   Vector out(1);
   out(0) = v;
   return out;
+}
+
+/// 1/2 x'Hx + g'x.
+inline double QpObjective(const Matrix& H, const Vector& g, const Vector& x) {
+  return 0.5 * x.dot(H * x) + g.dot(x);
+}
+
+/// Box QP min 1/2 x'Hx + g'x, lo <= x <= hi, by brute force (an independent check of BoxQP):
+/// every assignment of each variable to {lower, upper, free}; solve the free block; keep the
+/// feasible point with the lowest objective. 3^n candidates, so for small n only.
+inline Vector BruteForceBoxQp(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi) {
+  const int n = static_cast<int>(g.size());
+  int combos = 1;
+  for (int i = 0; i < n; ++i) combos *= 3;
+  Vector best;
+  double best_value = 1e300;
+  for (int c = 0; c < combos; ++c) {
+    Vector x = Vector::Zero(n);
+    std::vector<int> free_idx;
+    std::vector<bool> is_free(n, false);
+    int code = c;
+    for (int i = 0; i < n; ++i, code /= 3) {
+      if (code % 3 == 0) x(i) = lo(i);
+      if (code % 3 == 1) x(i) = hi(i);
+      if (code % 3 == 2) {
+        free_idx.push_back(i);
+        is_free[i] = true;
+      }
+    }
+    const int nf = static_cast<int>(free_idx.size());
+    if (nf > 0) {
+      Matrix Hff(nf, nf);
+      Vector rhs(nf);
+      for (int a = 0; a < nf; ++a) {
+        rhs(a) = -g(free_idx[a]);
+        for (int i = 0; i < n; ++i) {
+          if (!is_free[i]) rhs(a) -= H(free_idx[a], i) * x(i);
+        }
+        for (int b = 0; b < nf; ++b) Hff(a, b) = H(free_idx[a], free_idx[b]);
+      }
+      const Vector xf = Hff.ldlt().solve(rhs);
+      for (int a = 0; a < nf; ++a) x(free_idx[a]) = xf(a);
+    }
+    bool feasible = true;
+    for (int i = 0; i < n; ++i) feasible &= x(i) >= lo(i) - 1e-12 && x(i) <= hi(i) + 1e-12;
+    const double value = QpObjective(H, g, x);
+    if (feasible && value < best_value) {
+      best_value = value;
+      best = x;
+    }
+  }
+  return best;
 }
 
 }  // namespace testing
