@@ -108,6 +108,7 @@ void HopperController::Initialize() {
   if (c.sync_riccati_regularization) {
     for (LearnerSettings* ls : {&config_.learner, &config_.model_learner}) {
       ls->backward.riccati_regularization = ls->controller.regularization;
+      ls->backward.regularization_scaling = ls->controller.regularization_scaling;
     }
   }
 

@@ -46,7 +46,16 @@ enum class Method {
 ///   pushes the same way and the gain L_uu^-1 (L_uz + F_u^T P) overshoots. On the model closed
 ///   loop (+0.05 m/s push, 100 hops) Lyapunov+mu 0.1 drifts away (cost 1.10 -> 13), Riccati+mu
 ///   0.01 returns to the gait in ~10 hops and rejects +0.2 m/s and a -0.3 m/s push;
-/// - regularization 0.01 (mu of H = L_uu + mu I, same mu in the Riccati equation);
+/// - regularization 0.01 (mu of H = L_uu + mu I, same mu in the Riccati equation), one scalar
+///   for all inputs (RegularizationScaling::kScalar). With R = 1e-2 diag(1, 1e-2, 1e-4, 1e-4) that
+///   mu is ~5x L_uu of tau0, ~500x of F0 and ~5e4x of the stiffness channels. Measured
+///   alternative (scenario <learning regularization_scaling="per_input" regularization=r>):
+///   mu_i = r (|L_uu,ii| + (u_max_i - u_min_i)^-2). r = 0.01 / 0.1: the Riccati pass blows up
+///   (non-finite P22) or the robots fall; r = 1 (tau0/F0 mu about as now, stiffness mu 200-3000x
+///   smaller): exact robots as now, but inexact 8 kg falls with every method (hop 6-13) and the
+///   inexact 12 kg robot is not rescued (5-7); r = 2-3 lets inexact 12 kg Algorithm 1 hop 100
+///   (last-20 cost 1.9-2.7) but push_m12 falls (31/70) and inexact 8 kg falls (24-51); r = 4-10
+///   breaks exact 8 kg. So not the default;
 /// - backward.psd_switching_hessians: the Riccati pass escapes to infinity when a hop with a
 ///   large I1 residual makes Phi_zz indefinite (seen on the 8 kg robot);
 /// - alpha_initial = 0.1 and alpha multiplies the feed-forward only: a full (alpha = 1)
@@ -95,8 +104,8 @@ struct ControllerConfig {
   /// 1.1504 while the law's steady cycle costs 1.1596, and no later hop ever passes (36)
   /// against hop 0. >= 1.
   int initial_hops = 3;
-  /// true: Create sets backward.riccati_regularization = controller.regularization in both
-  /// learners, so that the Riccati gain and the controller's H = L_uu + mu I agree even when
+  /// true: Create sets backward.riccati_regularization = controller.regularization (and
+  /// backward.regularization_scaling = controller.regularization_scaling) in both learners, so that the Riccati gain and the controller's H = L_uu + mu I agree even when
   /// only the controller's regularization is overridden (e.g. a scenario's <learning>).
   bool sync_riccati_regularization = true;
   /// How the controller's normalized time tau of (12) is computed on the robot (the recorded

@@ -39,6 +39,30 @@ enum class BackwardEquation {
   kRiccati
 };
 
+/// How the regularization mu of H = L_uu + diag(mu) is formed, in (33) (OnlineController) and
+/// in the Riccati variants of the backward pass. reg is the settings' regularization.
+enum class RegularizationScaling {
+  /// One scalar for every input: mu_i = reg (1 + max_j |L_uu,jj|). The "1" is in raw input
+  /// units, so an input with a small curvature (e.g. a stiffness command in N/m whose R weight
+  /// is 1e-6) gets a mu many orders above its own L_uu,ii.
+  kScalar,
+  /// Per input, in normalized input units v_i = u_i / s_i with s_i = u_max_i - u_min_i:
+  ///   mu_i = reg (|L_uu,ii| + s_i^-2),
+  /// i.e. Marquardt's scaling by the input's own curvature plus a floor reg that is the same for
+  /// every input once measured in fractions of its range (s_i = 1 where the range is 0 or not
+  /// finite). Invariant to rescaling an input's units (with its bounds).
+  kPerInput
+};
+
+/// mu (m) of H = L_uu + diag(mu) for the given scaling; inv_range_sq (m) holds s_i^-2 (see
+/// InverseSquaredInputRanges). Does not allocate.
+void RegularizationDiagonal(RegularizationScaling scaling, double reg, const ConstMatrixRef& luu,
+                            const ConstVectorRef& inv_range_sq, VectorRef mu);
+
+/// s_i^-2 of RegularizationScaling::kPerInput: (u_max_i - u_min_i)^-2, 1 where the range is 0
+/// or not finite. Allocates (call at setup).
+Vector InverseSquaredInputRanges(const Bounds& bounds);
+
 /// Settings of BackwardPass.
 struct BackwardPassSettings {
   /// The equation for P, p (default: the paper's Lyapunov-type (30)).
@@ -49,6 +73,10 @@ struct BackwardPassSettings {
   /// Use the same value as OnlineControllerSettings::regularization so that the gain the
   /// controller applies is the gain the Riccati equation assumed. >= 0.
   double riccati_regularization = 0.1;
+  /// Riccati variants: how mu is formed from riccati_regularization (default kScalar, the
+  /// formula above; kPerInput: mu_i = reg (|L_uu,ii| + (u_max_i - u_min_i)^-2)). Use the same
+  /// value as OnlineControllerSettings::regularization_scaling.
+  RegularizationScaling regularization_scaling = RegularizationScaling::kScalar;
   /// Option (default false = the exact Hessians): replace each switching-cost Hessian Phi_{k,zz}
   /// by its projection onto the positive semidefinite cone (negative eigenvalues set to 0)
   /// before it enters P. With a large terminal residual the exact Hessian of a squared
@@ -193,6 +221,8 @@ class BackwardPass {
   Matrix W_;              // nz_max x m: M H^{-1} (Riccati variants)
   Vector r_;              // m: L_u + F_u^T p (kRiccati)
   Eigen::LLT<Matrix> llt_;  // m x m (Riccati variants)
+  Vector inv_range_sq_;     // m: (u_max - u_min)^-2 (kPerInput)
+  Vector mu_;               // m: regularization diagonal (Riccati variants)
   BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
   bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }
   void Invert(Coefficients* c);

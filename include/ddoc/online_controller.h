@@ -19,6 +19,10 @@ struct OnlineControllerSettings {
   /// mu added to the diagonal of L_uu in (33), relative: mu = regularization * (1 + max|diag L_uu|).
   /// Keeps the QP strictly convex when l_uu is singular.
   double regularization = 1e-9;
+  /// How mu is formed from `regularization` (default kScalar, the formula above; kPerInput:
+  /// mu_i = regularization (|L_uu,ii| + (u_max_i - u_min_i)^-2), H = L_uu + diag(mu)). Use the
+  /// same value as BackwardPassSettings::regularization_scaling with a Riccati backward pass.
+  RegularizationScaling regularization_scaling = RegularizationScaling::kScalar;
   /// Interpolate nominal and gains linearly in tau between samples (true) or hold the sample
   /// at or before tau (false).
   bool interpolate = true;
@@ -117,6 +121,8 @@ class OnlineController : public Policy {
   Vector b_;       // m
   Matrix H_;       // m x m
   Vector lo_, hi_; // m
+  Vector mu_;      // m: regularization diagonal of H
+  Vector inv_range_sq_;  // m: (u_max - u_min)^-2 (kPerInput)
   Vector du_;      // m
   // Per-trial bookkeeping.
   double du_integral_ = 0;

@@ -217,6 +217,15 @@ int Run(int argc, char** argv) {
     config.learner.controller.regularization = *l.regularization;
     config.model_learner.controller.regularization = *l.regularization;
   }
+  if (l.per_input_regularization) {
+    const RegularizationScaling scaling = *l.per_input_regularization
+                                              ? RegularizationScaling::kPerInput
+                                              : RegularizationScaling::kScalar;
+    for (LearnerSettings* ls : {&config.learner, &config.model_learner}) {
+      ls->controller.regularization_scaling = scaling;
+      ls->backward.regularization_scaling = scaling;
+    }
+  }
   if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();

@@ -138,6 +138,14 @@ Scenario LoadScenario(const std::string& path) {
         }
         l.alpha_scales_feedback = v == "all";
       }
+      if (const char* a = e->Attribute("regularization_scaling")) {
+        const std::string v = a;
+        if (v != "scalar" && v != "per_input") {
+          Fail(path, line, "<learning> regularization_scaling=\"" + v +
+                               "\" (expected scalar or per_input)");
+        }
+        l.per_input_regularization = v == "per_input";
+      }
       if (const char* a = e->Attribute("alpha_after_accept")) {
         const std::string v = a;
         if (v != "reset" && v != "grow") {

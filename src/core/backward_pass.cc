@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/backward_pass.h"
 
+#include <cmath>
 #include <sstream>
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
@@ -279,6 +280,36 @@ void RunStagePass(const StagePass& s, int nz) {
 
 }  // namespace
 
+void RegularizationDiagonal(RegularizationScaling scaling, double reg, const ConstMatrixRef& luu,
+                            const ConstVectorRef& inv_range_sq, VectorRef mu) {
+  const int m = static_cast<int>(luu.rows());
+  if (luu.cols() != m || inv_range_sq.size() != m || mu.size() != m) {
+    throw InvalidArgument("RegularizationDiagonal: L_uu is " + std::to_string(luu.rows()) + "x" +
+                          std::to_string(luu.cols()) + ", inv_range_sq has " +
+                          std::to_string(inv_range_sq.size()) + " and mu " +
+                          std::to_string(mu.size()) + " entries (expected m x m, m, m)");
+  }
+  if (scaling == RegularizationScaling::kPerInput) {
+    mu = reg * (luu.diagonal().cwiseAbs() + inv_range_sq);
+  } else {
+    mu.setConstant(reg * (1.0 + luu.diagonal().cwiseAbs().maxCoeff()));
+  }
+}
+
+Vector InverseSquaredInputRanges(const Bounds& bounds) {
+  if (bounds.u_min.size() != bounds.u_max.size()) {
+    throw InvalidArgument("InverseSquaredInputRanges: u_min has " +
+                          std::to_string(bounds.u_min.size()) + " entries, u_max " +
+                          std::to_string(bounds.u_max.size()));
+  }
+  Vector out(bounds.u_min.size());
+  for (int i = 0; i < out.size(); ++i) {
+    const double s = bounds.u_max(i) - bounds.u_min(i);
+    out(i) = (std::isfinite(s) && s > 0) ? 1.0 / (s * s) : 1.0;
+  }
+  return out;
+}
+
 void BackwardPass::Coefficients::Allocate(int nz_max, int m) {
   A.setZero(nz_max, nz_max);
   Q.setZero(nz_max, nz_max);
@@ -323,6 +354,8 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   ff_store_.setZero(m_, max_samples);
   luu_store_.setZero(m_ * m_, max_samples);
   for (auto& c : coef_) c.Allocate(nz_max_, m_);
+  inv_range_sq_ = InverseSquaredInputRanges(problem.bounds);
+  mu_.setZero(m_);
   z_.setZero(nz_max_);
   phiz_.setZero(nz_max_);
   phizz_.setZero(nz_max_, nz_max_);
@@ -391,9 +424,9 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
 void BackwardPass::Invert(Coefficients* c) {
   // (L_uu + mu I)^{-1} without allocation (LLT preallocated for m x m).
   c->LuuInv = c->Luu;
-  const double mu =
-      settings_.riccati_regularization * (1.0 + c->Luu.diagonal().cwiseAbs().maxCoeff());
-  c->LuuInv.diagonal().array() += mu;
+  RegularizationDiagonal(settings_.regularization_scaling, settings_.riccati_regularization,
+                         c->Luu, inv_range_sq_, mu_);
+  c->LuuInv.diagonal() += mu_;
   llt_.compute(c->LuuInv);
   if (llt_.info() != Eigen::Success) {
     throw InvalidArgument(

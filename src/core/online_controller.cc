@@ -45,6 +45,8 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   lo_.setZero(m_);
   hi_.setZero(m_);
   du_.setZero(m_);
+  mu_.setZero(m_);
+  inv_range_sq_ = InverseSquaredInputRanges(problem.bounds);
   loaded_ = false;
 }
 
@@ -188,11 +190,12 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   } else {
     b_.noalias() -= (1.0 - alpha_) * ((1.0 - w) * cff_.col(s0) + w * cff_.col(s1));
   }
-  // H = L_uu(tau) + mu I.
+  // H = L_uu(tau) + diag(mu).
   H_ = (1.0 - w) * Eigen::Map<const Matrix>(luu_.col(s0).data(), m_, m_) +
        w * Eigen::Map<const Matrix>(luu_.col(s1).data(), m_, m_);
-  const double mu = settings_.regularization * (1.0 + H_.diagonal().cwiseAbs().maxCoeff());
-  H_.diagonal().array() += mu;
+  RegularizationDiagonal(settings_.regularization_scaling, settings_.regularization, H_,
+                         inv_range_sq_, mu_);
+  H_.diagonal() += mu_;
   lo_ = umin - unom_;
   hi_ = umax - unom_;
   // The nominal can sit slightly outside the box (interpolation, measured inputs).

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -74,6 +75,23 @@ TEST_F(ScenarioTest, ParsesEveryElementAndResolvesPathsAgainstTheFile) {
   EXPECT_DOUBLE_EQ(s.pushes[0].force, -20.0);  // sorted by time
   EXPECT_DOUBLE_EQ(s.pushes[1].force, 25.0);
   EXPECT_DOUBLE_EQ(s.forward_speed, 0.5);
+}
+
+TEST_F(ScenarioTest, LearningRegularizationScaling) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='per_input'");
+  Scenario s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.per_input_regularization.has_value());
+  EXPECT_TRUE(*s.learning.per_input_regularization);
+  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='scalar'");
+  s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.per_input_regularization.has_value());
+  EXPECT_FALSE(*s.learning.per_input_regularization);
+  std::snprintf(buf, sizeof(buf), fmt, "");
+  EXPECT_FALSE(LoadScenario(Write(buf)).learning.per_input_regularization.has_value());
+  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='diag'");
+  ExpectError(buf, {"<learning>", "regularization_scaling=\"diag\"", "per_input"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {

@@ -3,6 +3,7 @@
 // The backward pass (30): closed-form LQ solution, the cost gradient w.r.t. u(.) and T against
 // finite differences of the true (simulated) cost, the du_prev driving term, no allocation.
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -284,6 +285,75 @@ TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
     EXPECT_EQ(feedback.p(0, j), lyapunov.p(0, j));
   }
   EXPECT_NE(pass.p(0, 0)(0), lyapunov.p(0, 0)(0));  // kRiccati changes p
+}
+
+TEST(BackwardPass, PerInputRegularizationEntersTheRiccatiEquation) {
+  // kRiccati with riccati_regularization reg: H = L_uu + mu with L_uu = D r (tau units), so in
+  // time the Riccati equation uses r_eff = H / D:
+  //   kPerInput: mu = reg (D r + s^-2), s = u_max - u_min = 20 -> r_eff = r + reg (r + 1/(D s^2))
+  //   kScalar:   mu = reg (1 + D r)                             -> r_eff = r + reg (1 + D r) / D
+  // Each is integrated independently with fine RK4 and compared with the pass.
+  const ScalarLqSetup setup{ScalarLq{}};
+  const ScalarLq& lq = setup.lq;
+  const Trajectory traj = setup.Exact(481);
+  const double reg = 0.5, D = lq.T, s = 20.0;
+  for (const auto scaling : {RegularizationScaling::kPerInput, RegularizationScaling::kScalar}) {
+    const bool per_input = scaling == RegularizationScaling::kPerInput;
+    const double r_eff =
+        per_input ? lq.r + reg * (lq.r + 1.0 / (D * s * s)) : lq.r + reg * (1.0 + D * lq.r) / D;
+    BackwardPassSettings settings;
+    settings.equation = BackwardEquation::kRiccati;
+    settings.riccati_regularization = reg;
+    settings.regularization_scaling = scaling;
+    BackwardPass pass;
+    pass.Allocate(setup.problem, 481, settings);
+    pass.Run(traj);
+    auto f = [&](double P) { return 2 * lq.a * P + lq.q - P * P * lq.b * lq.b / r_eff; };
+    double P = lq.s;
+    const int M = 48000;
+    const double h = lq.T / M;
+    for (int i = M; i > 0; --i) {
+      if (i % 4000 == 0) {
+        EXPECT_NEAR(pass.P(0, i / 100)(0, 0), P, 1e-7 * P) << "per_input " << per_input;
+      }
+      const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2),
+                   k4 = f(P + h * k3);
+      P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+    EXPECT_NEAR(pass.P(0, 0)(0, 0), P, 1e-7 * P) << "per_input " << per_input;
+  }
+}
+
+TEST(BackwardPass, RegularizationDiagonalScalarAndPerInput) {
+  Bounds b;
+  b.u_min = Vector(4);
+  b.u_max = Vector(4);
+  b.u_min << -1, 0, 3, -std::numeric_limits<double>::infinity();
+  b.u_max << 1, 10, 3, 0;
+  const Vector inv = InverseSquaredInputRanges(b);
+  ASSERT_EQ(inv.size(), 4);
+  EXPECT_DOUBLE_EQ(inv(0), 0.25);
+  EXPECT_DOUBLE_EQ(inv(1), 0.01);
+  EXPECT_DOUBLE_EQ(inv(2), 1.0);  // zero range
+  EXPECT_DOUBLE_EQ(inv(3), 1.0);  // infinite range
+  Matrix luu(4, 4);
+  luu << 2, 0.1, 0, 0,  //
+      0.1, -3, 0, 0,    //
+      0, 0, 1e-6, 0,    //
+      0, 0, 0, 0.5;
+  Vector mu(4);
+  RegularizationDiagonal(RegularizationScaling::kScalar, 0.1, luu, inv, mu);
+  for (int i = 0; i < 4; ++i) EXPECT_DOUBLE_EQ(mu(i), 0.1 * (1 + 3));
+  RegularizationDiagonal(RegularizationScaling::kPerInput, 0.1, luu, inv, mu);
+  EXPECT_DOUBLE_EQ(mu(0), 0.1 * (2 + 0.25));
+  EXPECT_DOUBLE_EQ(mu(1), 0.1 * (3 + 0.01));
+  EXPECT_DOUBLE_EQ(mu(2), 0.1 * (1e-6 + 1));
+  EXPECT_DOUBLE_EQ(mu(3), 0.1 * (0.5 + 1));
+  Vector wrong(3);
+  EXPECT_THROW(RegularizationDiagonal(RegularizationScaling::kPerInput, 0.1, luu, inv, wrong),
+               InvalidArgument);
+  b.u_max.resize(3);
+  EXPECT_THROW(InverseSquaredInputRanges(b), InvalidArgument);
 }
 
 TEST(BackwardPass, PsdSwitchingHessiansProjectsAnIndefiniteTerminalHessian) {

@@ -107,6 +107,60 @@ TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
   EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
 }
 
+TEST(OnlineController, PerInputRegularizationSolvesTheRegularizedQp) {
+  // (33) with H = L_uu + diag(mu): kPerInput mu_i = reg (|L_uu,ii| + s_i^-2) with input ranges
+  // s = (2, 10, 1), kScalar mu_i = reg (1 + max|diag L_uu|); each against the brute-force box QP.
+  ControlSetup s(3);
+  s.problem.bounds.u_min = Vector(3);
+  s.problem.bounds.u_max = Vector(3);
+  s.problem.bounds.u_min << -1, -5, -0.5;
+  s.problem.bounds.u_max << 1, 5, 0.5;
+  const Vector inv_s2 = (Vector(3) << 0.25, 0.01, 1.0).finished();
+  const double alpha = 0.7, reg = 0.5;
+  const Vector dT = Vector::Zero(2);
+  for (const auto scaling : {RegularizationScaling::kPerInput, RegularizationScaling::kScalar}) {
+    OnlineControllerSettings settings;
+    settings.regularization = reg;
+    settings.regularization_scaling = scaling;
+    OnlineController ctrl;
+    ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
+    ctrl.Load(s.nominal, s.pass, alpha, dT);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> nd;
+    double max_diff_other = 0;  // vs the other scaling's solution: must differ
+    for (int k = 0; k < 2; ++k) {
+      const int n = s.sys->state_dim(k);
+      for (int j : {0, 5, 77, s.pass.num_samples(k) - 1}) {
+        const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
+        Vector x = s.nominal.modes[k].x.col(j);
+        for (int i = 0; i < n; ++i) x(i) += 0.5 * nd(rng);
+        Vector dz(n + 2);
+        dz << x - s.nominal.modes[k].x.col(j), dT;
+        const Vector b = s.pass.Gain(k, j) * dz + s.pass.Feedforward(k, j);
+        const Matrix luu = s.pass.Luu(k, j);
+        const double max_diag = luu.diagonal().cwiseAbs().maxCoeff();
+        Vector mu_pi(3), mu_sc = Vector::Constant(3, reg * (1 + max_diag));
+        for (int i = 0; i < 3; ++i) mu_pi(i) = reg * (std::abs(luu(i, i)) + inv_s2(i));
+        const Vector unom = s.nominal.modes[k].u.col(j);
+        const Vector lo = s.problem.bounds.u_min - unom, hi = s.problem.bounds.u_max - unom;
+        const Matrix H_pi = luu + Matrix(mu_pi.asDiagonal());
+        const Matrix H_sc = luu + Matrix(mu_sc.asDiagonal());
+        const Vector du_pi = testing::BruteForceBoxQp(H_pi, alpha * b, lo, hi);
+        const Vector du_sc = testing::BruteForceBoxQp(H_sc, alpha * b, lo, hi);
+        const bool per_input = scaling == RegularizationScaling::kPerInput;
+        Vector u(3);
+        ctrl.Step(k, t, x, u);
+        const Vector& mine = per_input ? du_pi : du_sc;
+        const Vector& other = per_input ? du_sc : du_pi;
+        EXPECT_LT((u - (unom + mine)).cwiseAbs().maxCoeff(), 1e-7)
+            << "per_input " << per_input << " k " << k << " j " << j;
+        max_diff_other = std::max(max_diff_other, (u - (unom + other)).cwiseAbs().maxCoeff());
+      }
+    }
+    EXPECT_GT(max_diff_other, 1e-3) << "the two scalings should give different inputs here";
+  }
+}
+
 TEST(OnlineController, TimeMappingClampsAndInterpolates) {
   ControlSetup s(2);
   OnlineController ctrl;
