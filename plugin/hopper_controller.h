@@ -55,7 +55,10 @@ enum class Method {
 ///   smaller): exact robots as now, but inexact 8 kg falls with every method (hop 6-13) and the
 ///   inexact 12 kg robot is not rescued (5-7); r = 2-3 lets inexact 12 kg Algorithm 1 hop 100
 ///   (last-20 cost 1.9-2.7) but push_m12 falls (31/70) and inexact 8 kg falls (24-51); r = 4-10
-///   breaks exact 8 kg. So not the default;
+///   breaks exact 8 kg. So not the default. Scaling ONLY the stiffness channels' mu (by 1e-3 ..
+///   100, tau0/F0 at the scalar mu; a throw-away build, not an option) shows they are not what
+///   the 12 kg robot lacks: inexact 12 kg Algorithm 1 falls at hop 9/8/9 with 1e-3/1e-2/1e-1
+///   (14 now) and 15 with 10/100, and 1e-3 also breaks inexact 8 kg (hop 6);
 /// - backward.psd_switching_hessians: the Riccati pass escapes to infinity when a hop with a
 ///   large I1 residual makes Phi_zz indefinite (seen on the 8 kg robot);
 /// - alpha_initial = 0.1 and alpha multiplies the feed-forward only: a full (alpha = 1)
