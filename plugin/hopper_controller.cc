@@ -271,7 +271,7 @@ void HopperController::BeginHop(double t, const mjData* d) {
   hop_nonfinite_ = 0;
 }
 
-void HopperController::NewStep(const mjModel* m, mjData* d) {
+void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
   const double t = d->time;
   if (!started_) {
     started_ = true;

@@ -91,6 +91,20 @@ struct BackwardPassSettings {
   bool use_previous_du = false;
   /// Integration scheme (default RK4).
   BackwardIntegrator integrator = BackwardIntegrator::kRk4;
+  /// Cyclic (periodic) value, NOT in the paper. 0 (default): the problem ends at T_K, as in
+  /// (2). gamma_c in (0, 1]: for a system with a cycle reset g_{K-1} (mode K-1 -> mode 0, e.g.
+  /// a hopper's takeoff), the terminal condition also values the NEXT cycle:
+  ///   P(K) = Phi_{K,zz} + gamma_c G^T P_0 G   (state block; G = dg_{K-1}/dx at x(T_K)),
+  /// where P_0 is the state block of P at tau = 0. Run sweeps the pass until P_0 is a fixed
+  /// point (the periodic Riccati solution on the nominal), warm-started from the previous Run.
+  /// Only P changes at the terminal (p(K) = Phi_{K,z}): the gains see the consequences of a
+  /// deviation in all later cycles instead of only in this one; the feed-forward still
+  /// descends this cycle's cost. Riccati variants only (kLyapunov ignores it).
+  double cyclic_value = 0.0;
+  /// Most sweeps per Run for the cyclic value, and the relative change of P_0 (Frobenius) at
+  /// which the sweeps stop.
+  int cyclic_max_sweeps = 30;
+  double cyclic_tolerance = 1e-4;
 };
 
 /// The backward pass (30), derived from (26)-(29) with delta-lambda = P delta-z + p:
@@ -127,6 +141,10 @@ class BackwardPass {
   /// variation at the samples; used only with settings.use_previous_du (nullptr = 0).
   /// Does not allocate. Throws InvalidArgument on size mismatches.
   void Run(const Trajectory& nominal, const Matrix* du_prev = nullptr);
+  /// Sweeps of the last Run (1 without a cyclic value).
+  int sweeps() const { return sweeps_; }
+  /// Forget the cyclic P_0 of the previous Run (the next Run starts from P_0 = 0).
+  void ResetCyclicValue() { cyclic_valid_ = false; }
 
   bool valid() const { return valid_; }
   const BackwardPassSettings& settings() const { return settings_; }
@@ -223,6 +241,13 @@ class BackwardPass {
   Eigen::LLT<Matrix> llt_;  // m x m (Riccati variants)
   Vector inv_range_sq_;     // m: (u_max - u_min)^-2 (kPerInput)
   Vector mu_;               // m: regularization diagonal (Riccati variants)
+  // Cyclic value (settings.cyclic_value > 0).
+  Matrix cyclic_P0_;        // n_0 x n_0: state block of P(0) of the last sweep
+  Matrix cyclic_G_;         // n_0 x n_{K-1}: dg_{K-1}/dx at the end of the nominal
+  Matrix cyclic_tmp_;       // n_0 x n_{K-1}
+  bool cyclic_valid_ = false;
+  int sweeps_ = 0;
+  void Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
   BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
   bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }
   void Invert(Coefficients* c);

@@ -145,6 +145,13 @@ class Learner {
   /// A trial that could not be measured (robot fell, NaN): counts as rejected.
   TrialResult AbortTrial();
 
+  /// Re-runs the backward pass (30) along the current nominal, keeping its measured cost I^i.
+  /// For costs whose parameters changed since the nominal was accepted, e.g. a terminal cost
+  /// that refers to the next trial's measured initial state (the hopper's I1 with x(0) = the
+  /// next hop's takeoff state). The next NextTrial() uses the new pass. Call it between
+  /// CompleteTrial (or Initialize) and NextTrial.
+  void RecomputeDirection();
+
   /// Batch Algorithm 1 / mRL / OC-FB from a fixed initial state: runs `initial_policy` on both
   /// plants, then trials until convergence, line-search failure or max_trials. Pass the same
   /// object twice for Algorithm 1 (real, real) and OC-FB (model, model); (model, real) is mRL.

@@ -33,6 +33,8 @@ struct OnlineControllerSettings {
   /// feed-forward L_u + F_u^T p; the feedback (L_uz + F_u^T P)[dx; dT_alpha] stays whole, so
   /// alpha -> 0 tracks the nominal trajectory with feedback. dT_alpha comes from (31) either way.
   bool alpha_scales_feedback = true;
+  /// kappa: multiplies the state feedback (L_uz + F_u^T P) dx of (34) (1: as printed).
+  double feedback_scale = 1.0;
   BoxQPSettings qp;  ///< settings of the m-dimensional box QP
 };
 

@@ -227,6 +227,11 @@ int Run(int argc, char** argv) {
     }
   }
   if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
+  if (l.alpha_initial) config.learner.alpha_initial = *l.alpha_initial;
+  if (l.cyclic_value) {
+    config.learner.backward.cyclic_value = *l.cyclic_value;
+    config.model_learner.backward.cyclic_value = *l.cyclic_value;
+  }
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();
   std::unique_ptr<plugin::HopperController> controller =

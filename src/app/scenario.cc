@@ -131,6 +131,8 @@ Scenario LoadScenario(const std::string& path) {
       l.alpha_min = OptionalDouble(path, e, "alpha_min");
       l.max_duration_step = OptionalDouble(path, e, "max_duration_step");
       l.regularization = OptionalDouble(path, e, "regularization");
+      l.alpha_initial = OptionalDouble(path, e, "alpha_initial");
+      l.cyclic_value = OptionalDouble(path, e, "cyclic_value");
       if (const char* a = e->Attribute("alpha_scales")) {
         const std::string v = a;
         if (v != "all" && v != "feedforward") {
@@ -199,6 +201,12 @@ void ValidateScenario(const Scenario& s) {
   positive(l.max_duration_step, "learning max_duration_step");
   if (l.regularization && *l.regularization < 0.0) Fail(f, 0, "learning regularization must be >= 0");
   if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) Fail(f, 0, "learning gamma must be in (0, 1)");
+  if (l.alpha_initial && !(*l.alpha_initial > 0.0 && *l.alpha_initial <= 1.0)) {
+    Fail(f, 0, "learning alpha_initial must be in (0, 1]");
+  }
+  if (l.cyclic_value && !(*l.cyclic_value >= 0.0 && *l.cyclic_value <= 1.0)) {
+    Fail(f, 0, "learning cyclic_value must be in [0, 1]");
+  }
   for (const Push& p : s.pushes) {
     if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
     if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");

@@ -58,6 +58,8 @@ struct LearningOverrides {
   // input units, RegularizationScaling::kPerInput); both learners, controller and Riccati pass
   std::optional<bool> per_input_regularization;
   std::optional<bool> reset_alpha_on_accept;  // alpha_after_accept="reset" (paper) | "grow"
+  std::optional<double> alpha_initial;      // alpha_0 of the line search, in (0, 1]
+  std::optional<double> cyclic_value;       // BackwardPassSettings::cyclic_value, in [0, 1]
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory

@@ -360,6 +360,14 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   phiz_.setZero(nz_max_);
   phizz_.setZero(nz_max_, nz_max_);
   Gz_.setZero(nz_max_, nz_max_);
+  cyclic_P0_.setZero(n_max_, n_max_);
+  cyclic_G_.setZero(n_max_, n_max_);
+  cyclic_tmp_.setZero(n_max_, n_max_);
+  cyclic_valid_ = false;
+  if (!(settings.cyclic_value >= 0.0 && settings.cyclic_value <= 1.0)) {
+    throw InvalidArgument("BackwardPassSettings: cyclic_value = " +
+                          std::to_string(settings.cyclic_value) + ", expected in [0, 1]");
+  }
   tmp_.setZero(nz_max_, nz_max_);
   P_.setZero(nz_max_, nz_max_);
   p_.setZero(nz_max_);
@@ -661,6 +669,38 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     for (int j = 0; j < counts_[k]; ++j) tau_(offsets_[k] + j) = nominal.Tau(k, j);
   }
 
+  const bool cyclic = settings_.cyclic_value > 0 && riccati() &&
+                      problem_->system->has_cycle_reset();
+  if (!cyclic) {
+    Sweep(nominal, du_prev, false);
+    sweeps_ = 1;
+    valid_ = true;
+    return;
+  }
+  const int n0 = dims_[0];
+  const int nK = dims_[K_ - 1];
+  {
+    const ModeTrajectory& last = nominal.modes[K_ - 1];
+    problem_->system->ResetDerivative(K_ - 1, last.x.col(last.num_samples() - 1),
+                                      cyclic_G_.topLeftCorner(n0, nK));
+  }
+  if (!cyclic_valid_) cyclic_P0_.topLeftCorner(n0, n0).setZero();
+  sweeps_ = 0;
+  for (int sweep = 0; sweep < std::max(1, settings_.cyclic_max_sweeps); ++sweep) {
+    Sweep(nominal, du_prev, true);
+    ++sweeps_;
+    Eigen::Map<const Matrix> P0(P_store_.col(index(0, 0)).data(), n0 + K_, n0 + K_);
+    const double change = (P0.topLeftCorner(n0, n0) - cyclic_P0_.topLeftCorner(n0, n0)).norm();
+    const double size = P0.topLeftCorner(n0, n0).norm();
+    cyclic_P0_.topLeftCorner(n0, n0) = P0.topLeftCorner(n0, n0);
+    if (!std::isfinite(size)) break;
+    if (change <= settings_.cyclic_tolerance * std::max(size, 1e-12)) break;
+  }
+  cyclic_valid_ = cyclic_P0_.topLeftCorner(n0, n0).allFinite();
+  valid_ = true;
+}
+
+void BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic) {
   Coefficients* hi = &coef_[0];
   Coefficients* lo = &coef_[1];
   for (int k = K_ - 1; k >= 0; --k) {
@@ -683,6 +723,13 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     if (k == K_ - 1) {
       P_.topLeftCorner(nz, nz) = phizz;
       p_.head(nz) = phiz;
+      if (cyclic) {  // + gamma_c G^T P_0 G: the value of the next cycle
+        const int n0 = dims_[0];
+        auto G = cyclic_G_.topLeftCorner(n0, n);
+        auto tmp = cyclic_tmp_.topLeftCorner(n0, n);
+        tmp.noalias() = cyclic_P0_.topLeftCorner(n0, n0) * G;
+        P_.topLeftCorner(n, n).noalias() += settings_.cyclic_value * (G.transpose() * tmp);
+      }
     } else {
       const int nzn = dims_[k + 1] + K_;
       auto Gz = Gz_.topLeftCorner(nzn, nz);
@@ -713,7 +760,6 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
       std::swap(hi, lo);
     }
   }
-  valid_ = true;
 }
 
 }  // namespace ddoc

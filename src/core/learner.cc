@@ -67,6 +67,15 @@ void Learner::AcceptNominal(const Trajectory& direction, double cost) {
   pass_.Run(nominal_, du);
 }
 
+void Learner::RecomputeDirection() {
+  if (!initialized_) throw InvalidArgument("Learner::RecomputeDirection: call Initialize first");
+  if (trial_pending_) {
+    throw InvalidArgument("Learner::RecomputeDirection: a trial is pending (call CompleteTrial first)");
+  }
+  const bool previous = settings_.backward.use_previous_du && iteration_ > 0;
+  pass_.Run(nominal_, previous ? &du_prev_ : nullptr);
+}
+
 void Learner::Initialize(const Trajectory& measured, const Trajectory* direction) {
   const CostBreakdown cost = EvaluateCost(*problem_, measured);
   if (!std::isfinite(cost.total)) {

@@ -13,6 +13,10 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
     throw InvalidArgument("OnlineController::Allocate: max_samples = " +
                           std::to_string(max_samples) + ", expected >= 2");
   }
+  if (!(settings.feedback_scale >= 0.0) || !std::isfinite(settings.feedback_scale)) {
+    throw InvalidArgument("OnlineControllerSettings: feedback_scale = " +
+                          std::to_string(settings.feedback_scale) + ", expected finite and >= 0");
+  }
   problem_ = &problem;
   settings_ = settings;
   const SwitchedSystem& sys = *problem.system;
@@ -183,8 +187,8 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   Eigen::Map<const Matrix> K0(Kx_.col(s0).data(), m_, n);
   Eigen::Map<const Matrix> K1(Kx_.col(s1).data(), m_, n);
   b_ = (1.0 - w) * c_.col(s0) + w * c_.col(s1);
-  b_.noalias() += (1.0 - w) * K0 * dx;
-  b_.noalias() += w * K1 * dx;
+  b_.noalias() += ((1.0 - w) * settings_.feedback_scale) * K0 * dx;
+  b_.noalias() += (w * settings_.feedback_scale) * K1 * dx;
   if (settings_.alpha_scales_feedback) {
     b_ *= alpha_;  // (33) as printed
   } else {

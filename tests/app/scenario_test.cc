@@ -94,6 +94,23 @@ TEST_F(ScenarioTest, LearningRegularizationScaling) {
   ExpectError(buf, {"<learning>", "regularization_scaling=\"diag\"", "per_input"});
 }
 
+TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='0.9' alpha_initial='0.3'");
+  const Scenario s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.cyclic_value.has_value());
+  EXPECT_DOUBLE_EQ(*s.learning.cyclic_value, 0.9);
+  ASSERT_TRUE(s.learning.alpha_initial.has_value());
+  EXPECT_DOUBLE_EQ(*s.learning.alpha_initial, 0.3);
+  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='1.5'");
+  ExpectError(buf, {"cyclic_value", "[0, 1]"});
+  std::snprintf(buf, sizeof(buf), fmt, "alpha_initial='0'");
+  ExpectError(buf, {"alpha_initial", "(0, 1]"});
+  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='abc'");
+  ExpectError(buf, {"cyclic_value"});
+}
+
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/>", {"s.xml", "malformed XML"});
   ExpectError("<scenario/>", {"<ddoc_scenario>"});

@@ -413,6 +413,130 @@ TEST(BackwardPass, RunDoesNotAllocate) {
   EXPECT_EQ(counter.count(), 0) << "kRiccati";
 }
 
+// A scalar LQ "cycle": one mode of duration T, xdot = a x + b u, l = 1/2 (q x^2 + r u^2), no
+// terminal cost, cycle reset x+ = x. With the cyclic value the terminal P of each sweep is
+// gamma_c P(0) of the previous one.
+struct CyclicLq {
+  double a = 0.5, b = 1.0, q = 2.0, r = 0.5, T = 0.3;
+  LinearSwitchedSystem sys{{Matrix::Constant(1, 1, a)}, {Matrix::Constant(1, 1, b)},
+                           {Matrix::Identity(1, 1)}, {}, {}, {}, /*cycle_reset=*/true};
+  QuadraticCost cost{{Matrix::Constant(1, 1, q)}, {Matrix::Constant(1, 1, r)}, {0.0},
+                     {Matrix::Zero(1, 1)}, {Vector::Zero(1)}};
+  Problem problem;
+  Trajectory traj;
+  CyclicLq() {
+    problem.system = &sys;
+    problem.cost = &cost;
+    problem.bounds.u_min = Vector::Constant(1, -10);
+    problem.bounds.u_max = Vector::Constant(1, 10);
+    problem.bounds.duration_min = Vector::Constant(1, 0.1);
+    problem.bounds.duration_max = Vector::Constant(1, 5);
+    problem.surface_weights = Vector::Zero(1);
+    traj.modes.resize(1);
+    const int N = 61;
+    traj.modes[0].t = Vector::LinSpaced(N, 0.0, T);
+    traj.modes[0].x = Matrix::Constant(1, N, 0.2);
+    traj.modes[0].u = Matrix::Constant(1, N, 0.1);
+    traj.T = Vector::Constant(1, T);
+    traj.x0 = traj.modes[0].x.col(0);
+  }
+  // P(0) of dP/dt = -(2 a P + q - P^2 b^2 / r) from P(T) = PT, fine RK4, written here.
+  double Flow(double PT) const {
+    auto f = [&](double P) { return 2 * a * P + q - P * P * b * b / r; };
+    double P = PT;
+    const int M = 30000;
+    const double h = T / M;
+    for (int i = 0; i < M; ++i) {
+      const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2),
+                   k4 = f(P + h * k3);
+      P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+    return P;
+  }
+};
+
+TEST(BackwardPass, CyclicValueConvergesToTheStationaryRiccatiSolution) {
+  // gamma_c = 1: the periodic solution of a time-invariant LQ problem is the algebraic Riccati
+  // solution 2 a P + q - P^2 b^2 / r = 0, P = r (a + sqrt(a^2 + q b^2 / r)) / b^2.
+  CyclicLq lq;
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kRiccati;
+  settings.riccati_regularization = 0;
+  settings.cyclic_value = 1.0;
+  settings.cyclic_max_sweeps = 200;
+  settings.cyclic_tolerance = 1e-12;
+  BackwardPass pass;
+  pass.Allocate(lq.problem, 100, settings);
+  pass.Run(lq.traj);
+  const double care = lq.r * (lq.a + std::sqrt(lq.a * lq.a + lq.q * lq.b * lq.b / lq.r)) /
+                      (lq.b * lq.b);
+  EXPECT_NEAR(pass.P(0, 0)(0, 0), care, 1e-6 * care);
+  EXPECT_NEAR(pass.P(0, 60)(0, 0), care, 1e-6 * care);  // stationary along the cycle
+  EXPECT_GT(pass.sweeps(), 5);
+  // One pass without the cyclic value starts from P(T) = 0 and is far from it.
+  BackwardPassSettings single = settings;
+  single.cyclic_value = 0.0;
+  BackwardPass plain;
+  plain.Allocate(lq.problem, 100, single);
+  plain.Run(lq.traj);
+  EXPECT_EQ(plain.sweeps(), 1);
+  EXPECT_NEAR(plain.P(0, 0)(0, 0), lq.Flow(0.0), 1e-6 * lq.Flow(0.0));
+  EXPECT_LT(plain.P(0, 0)(0, 0), 0.8 * care);
+  // A second Run is warm-started from the stored P(0): it is already a fixed point.
+  pass.Run(lq.traj);
+  EXPECT_LE(pass.sweeps(), 2);
+  // After ResetCyclicValue it starts again from 0.
+  pass.ResetCyclicValue();
+  pass.Run(lq.traj);
+  EXPECT_GT(pass.sweeps(), 5);
+}
+
+TEST(BackwardPass, DiscountedCyclicValueIsAFixedPointOfTheCycleMap) {
+  // gamma_c < 1: P0 = Flow(gamma_c P0), checked with the independent RK4 flow above.
+  CyclicLq lq;
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kRiccati;
+  settings.riccati_regularization = 0;
+  settings.cyclic_value = 0.6;
+  settings.cyclic_max_sweeps = 200;
+  settings.cyclic_tolerance = 1e-12;
+  BackwardPass pass;
+  pass.Allocate(lq.problem, 100, settings);
+  pass.Run(lq.traj);
+  const double P0 = pass.P(0, 0)(0, 0);
+  EXPECT_NEAR(P0, lq.Flow(0.6 * P0), 1e-6 * P0);
+  EXPECT_NEAR(pass.P(0, 60)(0, 0), 0.6 * P0, 1e-9 * P0);  // the terminal condition
+  // The Lyapunov form (the paper's (30)) ignores the option.
+  BackwardPassSettings lyap = settings;
+  lyap.equation = BackwardEquation::kLyapunov;
+  BackwardPass lp;
+  lp.Allocate(lq.problem, 100, lyap);
+  lp.Run(lq.traj);
+  EXPECT_EQ(lp.sweeps(), 1);
+  EXPECT_EQ(lp.P(0, 60)(0, 0), 0.0);
+}
+
+TEST(BackwardPass, CyclicValueRunDoesNotAllocateAndRejectsBadWeights) {
+  CyclicLq lq;
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kRiccati;
+  settings.cyclic_value = 0.9;
+  BackwardPass pass;
+  pass.Allocate(lq.problem, 100, settings);
+  pass.Run(lq.traj);
+  pass.ResetCyclicValue();
+  {
+    MallocCounter counter;
+    pass.Run(lq.traj);
+    EXPECT_EQ(counter.count(), 0);
+  }
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    settings.cyclic_value = bad;
+    BackwardPass b;
+    EXPECT_THROW(b.Allocate(lq.problem, 100, settings), InvalidArgument) << bad;
+  }
+}
+
 TEST(BackwardPass, RejectsMismatchedTrajectories) {
   const ScalarLqSetup setup{ScalarLq{}};
   BackwardPass pass;

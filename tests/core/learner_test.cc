@@ -375,6 +375,34 @@ TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
   EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
 }
 
+TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
+  // The terminal reference r_1 of the cost changes after Initialize (as the hopper's I1
+  // reference does when the next hop's start is measured): RecomputeDirection must give the
+  // pass of a learner initialized with the new reference on the same trajectory.
+  TwoModeLq lq;
+  LqProblem p(lq), q(lq);
+  q.cost.r_[1] = Eigen::Vector2d(0.3, -0.2);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  Trajectory measured;
+  plant.Run(lq.x0, initial, &measured);
+  Learner learner(p.problem, TestSettings()), reference(q.problem, TestSettings());
+  learner.Initialize(measured);
+  reference.Initialize(measured);
+  const double cost = learner.nominal_cost();
+  const Vector p_before = learner.backward_pass().p(0, 0);
+  EXPECT_GT((p_before - reference.backward_pass().p(0, 0)).norm(), 1e-3);
+  p.cost.r_[1] = q.cost.r_[1];
+  learner.RecomputeDirection();
+  EXPECT_LT((learner.backward_pass().p(0, 0) - reference.backward_pass().p(0, 0)).norm(), 1e-12);
+  EXPECT_EQ(learner.nominal_cost(), cost);  // the measured I^i is kept
+  learner.NextTrial();
+  EXPECT_THROW(learner.RecomputeDirection(), InvalidArgument);  // a trial is pending
+  Learner fresh(p.problem, TestSettings());
+  EXPECT_THROW(fresh.RecomputeDirection(), InvalidArgument);   // not initialized
+}
+
 TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   TwoModeLq lq;
   LqProblem p(lq);

@@ -107,6 +107,44 @@ TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
   EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
 }
 
+TEST(OnlineController, FeedbackScaleMultipliesOnlyTheStateFeedback) {
+  // b = kappa (L_uz + F_u^T P)_x dx + (L_uz + F_u^T P)_T dT + L_u + F_u^T p.
+  ControlSetup s(3);
+  const double alpha = 0.7, kappa = 0.4;
+  Vector dT(2);
+  dT << 0.02, -0.01;
+  OnlineControllerSettings settings;
+  settings.feedback_scale = kappa;
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
+  ctrl.Load(s.nominal, s.pass, alpha, dT);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> nd;
+  for (int k = 0; k < 2; ++k) {
+    const int n = s.sys->state_dim(k);
+    for (int j : {0, 33, s.pass.num_samples(k) - 1}) {
+      const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
+      Vector dx(n);
+      for (int i = 0; i < n; ++i) dx(i) = 0.3 * nd(rng);
+      const Vector x = s.nominal.modes[k].x.col(j) + dx;
+      const Matrix G = s.pass.Gain(k, j);
+      const Vector b = kappa * G.leftCols(n) * dx + G.rightCols(2) * dT + s.pass.Feedforward(k, j);
+      const Vector unom = s.nominal.modes[k].u.col(j);
+      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * b,
+                                                 s.problem.bounds.u_min - unom,
+                                                 s.problem.bounds.u_max - unom);
+      Vector u(3);
+      ctrl.Step(k, t, x, u);
+      EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
+    }
+  }
+  for (double bad : {-1.0, std::nan("")}) {
+    settings.feedback_scale = bad;
+    OnlineController c;
+    EXPECT_THROW(c.Allocate(s.problem, 10, settings), InvalidArgument) << bad;
+  }
+}
+
 TEST(OnlineController, PerInputRegularizationSolvesTheRegularizedQp) {
   // (33) with H = L_uu + diag(mu): kPerInput mu_i = reg (|L_uu,ii| + s_i^-2) with input ranges
   // s = (2, 10, 1), kScalar mu_i = reg (1 + max|diag L_uu|); each against the brute-force box QP.

@@ -14,13 +14,13 @@ namespace ddoc {
 namespace testing {
 
 /// xdot = A_k x + B_k u + c_k, x+ = E_k x, optional affine surface h_k = C_k x - d_k (s_k rows).
-/// Hand-written derivatives.
+/// Hand-written derivatives. cycle_reset: E_{K-1} is the cycle reset (last mode -> mode 0).
 class LinearSwitchedSystem : public SwitchedSystem {
  public:
   LinearSwitchedSystem(std::vector<Matrix> A, std::vector<Matrix> B, std::vector<Matrix> E,
                        std::vector<Matrix> C = {}, std::vector<Vector> d = {},
-                       std::vector<Vector> c = {})
-      : SwitchedSystem(Dims(A), static_cast<int>(B[0].cols()), SurfaceDims(A, C)),
+                       std::vector<Vector> c = {}, bool cycle_reset = false)
+      : SwitchedSystem(Dims(A), static_cast<int>(B[0].cols()), SurfaceDims(A, C), cycle_reset),
         A_(std::move(A)), B_(std::move(B)), E_(std::move(E)), C_(std::move(C)), d_(std::move(d)),
         c_(std::move(c)) {}
 
