@@ -61,6 +61,11 @@ const char* kUsage =
     "  --ocfb-alpha 0       alpha of ConvergedPolicy\n"
     "  --c 1e-7 --gamma 0.5 --grow 0|1 --alpha0 1   Algorithm 1 line search\n"
     "  --reference own|nominal  x_ref of I1 for the learner on the plant\n"
+    "  --q-y 0 --q-yd 10    I1 weights of y and yd (experiment; Fig. 2: 0, 10)\n"
+    "  --cyclic 0           BackwardPassSettings::cyclic_value (periodic Riccati value)\n"
+    "  --rebaseline 0 --isc 0   LearnerSettings::rebaseline_after, initial_state_correction\n"
+    "  --kfb 1              OnlineControllerSettings::feedback_scale\n"
+    "  --own-start 0|1      re-run (30) with I1's x(0) = the next hop's measured takeoff state\n"
     "  --model-M 10 --model-cd 0 --plant-M 10 --plant-cd 0\n"
     "  --pert 0.05          initial perturbation: xd += p, phi += p/5, phid += p\n"
     "  --push-hop -1 --push-dv 0   add dv to xd at the start of that hop\n"
@@ -191,7 +196,10 @@ int main(int argc, char** argv) {
   pp.M = a.Get("plant-M", mp.M);
   pp.c_d = a.Get("plant-cd", mp.c_d);
   HopperModel model(mp), truth(pp);
-  HopperCost cost(model);
+  HopperCostWeights weights;
+  weights.q_diag(hopper::kY) = a.Get("q-y", weights.q_diag(hopper::kY));
+  weights.q_diag(hopper::kYd) = a.Get("q-yd", weights.q_diag(hopper::kYd));
+  HopperCost cost(model, weights);
   Problem pr;
   pr.system = &model;
   pr.cost = &cost;
@@ -205,6 +213,9 @@ int main(int argc, char** argv) {
   gs.forward_speed = speed;
   const NominalGait g = FindNominalGait(mp, gs);
   cost.SetReference(g.x0);
+  std::fprintf(stderr, "# gait u0 %.4f %.4f %.2f %.2f x0 theta %.4f phi %.4f yd %.4f thetad %.4f phid %.4f apex %.3f stance %.3f\n",
+               g.u0(0), g.u0(1), g.u0(2), g.u0(3), g.x0(hopper::kTheta), g.x0(hopper::kPhi),
+               g.x0(hopper::kYd), g.x0(hopper::kThetad), g.x0(hopper::kPhid), g.apex, g.stance_time);
 
   ModelPlant mplant(pr);
   mplant.set_guard(
@@ -221,6 +232,10 @@ int main(int argc, char** argv) {
   ls.reset_alpha_on_accept = a.Get("grow", 1) == 0;
   ls.controller.alpha_scales_feedback = a.Get("alpha-ff", 1) == 0;
   ls.controller.regularization = a.Get("reg", 0.1);
+  ls.controller.feedback_scale = a.Get("kfb", 1.0);
+  ls.backward.cyclic_value = a.Get("cyclic", 0.0);
+  ls.rebaseline_after = static_cast<int>(a.Get("rebaseline", 0));
+  ls.initial_state_correction = a.Get("isc", 0) != 0;
   const int riccati = static_cast<int>(a.Get("riccati", 0));
   if (riccati == 1) ls.backward.equation = BackwardEquation::kRiccatiFeedback;
   if (riccati == 2) ls.backward.equation = BackwardEquation::kRiccati;
@@ -320,6 +335,11 @@ int main(int argc, char** argv) {
                 cb.switching(1), tr.T(0), tr.T(1), x0(hopper::kTheta), x0(hopper::kPhi),
                 x0(hopper::kXd), x0(hopper::kYd), alpha, accepted, ncost);
     x0 = next_x0(tr);
+    if (learner && a.Get("own-start", 0) != 0) {
+      // I1's x(0) of the next trial is its measured takeoff state: re-run (30) with it.
+      cost.SetReference(x0);
+      learner->RecomputeDirection();
+    }
     const bool fell = std::abs(x0(hopper::kPhi)) > 1.0 || std::abs(x0(hopper::kTheta)) > 1.0 ||
                       !(x0(hopper::kY) > 0.3) || !std::isfinite(cb.total) || cb.total > 1e3;
     if (fell) {
@@ -346,13 +366,35 @@ int main(int argc, char** argv) {
     Vector xs = survived == hops ? x0 : Vector(g.x0);
     const double h = 1e-6;
     Matrix J(14, 14);
-    for (int i = 0; i < 14; ++i) {
-      Vector xp = xs, xm = xs;
-      xp(i) += h;
-      xm(i) -= h;
-      J.col(i) = (map(xp) - map(xm)) / (2 * h);
+    auto jacobian = [&]() {
+      for (int i = 0; i < 14; ++i) {
+        Vector xp = xs, xm = xs;
+        xp(i) += h;
+        xm(i) -= h;
+        J.col(i) = (map(xp) - map(xm)) / (2 * h);
+      }
+    };
+    // --newton N: N Newton steps towards the law's fixed point (periodic orbit) on the plant.
+    for (int it = 0; it < static_cast<int>(a.Get("newton", 0)); ++it) {
+      jacobian();
+      const Vector r = map(xs) - xs;
+      const Matrix A = J - Matrix::Identity(14, 14);
+      xs -= A.completeOrthogonalDecomposition().solve(r);
+      std::fprintf(stderr, "# newton %d: |map(x)-x| = %.3g\n", it, (map(xs) - xs).norm());
     }
+    if (a.Get("newton", 0) > 0) {
+      std::fprintf(stderr, "# fixed point: theta %.4f phi %.4f xd %.4f yd %.4f thetad %.4f phid %.4f\n",
+                   xs(hopper::kTheta), xs(hopper::kPhi), xs(hopper::kXd), xs(hopper::kYd),
+                   xs(hopper::kThetad), xs(hopper::kPhid));
+    }
+    jacobian();
     Eigen::EigenSolver<Matrix> es(J);
+    std::fprintf(stderr, "# eigenvalues:");
+    for (int i = 0; i < 14; ++i) {
+      const auto e = es.eigenvalues()(i);
+      if (std::abs(e) > 0.05) std::fprintf(stderr, " (%.3f%+.3fi)", e.real(), e.imag());
+    }
+    std::fprintf(stderr, "\n");
     std::fprintf(stderr, "# return-map |eigenvalues|:");
     Vector mags = es.eigenvalues().cwiseAbs();
     std::sort(mags.data(), mags.data() + mags.size(), std::greater<double>());
