@@ -1,0 +1,52 @@
+"""tools/mass_sweep with the real ddoc-hopper (DDOC_HOPPER, set by CMake): generated robots load in
+MuJoCo, runs are logged, the table names every case; bad usage exits 2 with a message."""
+import csv
+import os
+import re
+import unittest
+
+from tools_test_util import TempDirTest, run_tool
+
+HOPPER = os.environ.get("DDOC_HOPPER", "")
+
+
+@unittest.skipUnless(os.access(HOPPER, os.X_OK), "DDOC_HOPPER (the ddoc-hopper binary) not set")
+class MassSweepTest(TempDirTest):
+    def test_two_short_runs(self):
+        out = os.path.join(self.tmp, "sweep")
+        r = run_tool("mass_sweep", "--masses", "11", "--methods", "ocfb", "--cyclic", "0,0.9",
+                     "--hops", "2", "--hopper", HOPPER, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(out, "robots", "hopper_m11.xml")) as f:
+            robot = f.read()
+        self.assertIn('mass="11.0"', robot)
+        self.assertRegex(robot, r'name="drag_cd" data="0.01"')
+        with open(os.path.join(out, "results.csv")) as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual([(r["method"], r["cyclic_value"]) for r in rows],
+                         [("ocfb", "0.0"), ("ocfb", "0.9")])
+        for row in rows:
+            self.assertEqual(row["exit"], "0")
+            self.assertEqual(row["hops"], "2")  # two hops really ran on the 11 kg robot
+        with open(os.path.join(out, "runs", "m11_ocfb_c0.9", "summary.json")) as f:
+            self.assertIn('"hops": 2', f.read())
+        with open(os.path.join(out, "results.md")) as f:
+            table = f.read()
+        self.assertTrue(re.search(r"\| 11 \| 2 \([0-9.]+\) \| 2 \([0-9.]+\) \|", table), table)
+
+
+class MassSweepUsageTest(TempDirTest):
+    def test_bad_usage(self):
+        r = run_tool("mass_sweep", "--methods", "foo", "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("foo", r.stderr)
+        r = run_tool("mass_sweep", "--cyclic", "2", "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--cyclic", r.stderr)
+        r = run_tool("mass_sweep", "--hopper", os.path.join(self.tmp, "nope"), "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("ddoc-hopper not found", r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
