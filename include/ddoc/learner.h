@@ -178,6 +178,9 @@ class Learner {
 
  private:
   void AcceptNominal(const Trajectory& direction, double cost);
+  // The trial `measured` (run with controllers_[active_]) becomes the nominal with cost `cost`:
+  // itself, or its re-run on direction_plant when one is given (mRL).
+  void AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost);
   // int |u_a(tau) - u_b(tau)|^2 dtau on a's grid, b interpolated in tau (trapezoid).
   static double InputDistance(const Trajectory& a, const Trajectory& b);
   // du_prev(s) = u_new(tau_s) - u_old(tau_s) at the samples of new (m x samples).

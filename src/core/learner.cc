@@ -67,6 +67,17 @@ void Learner::AcceptNominal(const Trajectory& direction, double cost) {
   pass_.Run(nominal_, du);
 }
 
+void Learner::AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost) {
+  if (direction_plant == nullptr) {
+    AcceptNominal(measured, cost);
+    return;
+  }
+  // mRL: the direction trajectory is the same law re-run on the direction plant.
+  Trajectory direction;
+  direction_plant->Run(measured.x0, controllers_[active_], &direction);
+  AcceptNominal(direction, cost);
+}
+
 void Learner::RecomputeDirection() {
   if (!initialized_) throw InvalidArgument("Learner::RecomputeDirection: call Initialize first");
   if (trial_pending_) {
@@ -214,13 +225,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step;
   if (r.accepted) {
     rejections_ = 0;
-    if (direction_plant != nullptr) {
-      Trajectory direction;
-      direction_plant->Run(measured.x0, controllers_[active_], &direction);
-      AcceptNominal(direction, r.cost);
-    } else {
-      AcceptNominal(measured, r.cost);
-    }
+    AdoptTrial(measured, direction_plant, r.cost);
     ++iteration_;
     step_history_.push_back(r.step);
     accepted_ = active_;
@@ -242,13 +247,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
         std::isfinite(r.cost) && status_ == LearnerStatus::kRunning) {
       // Restart Algorithm 1 from this trial: it is the new x^i with its measured cost.
       cost_memory_.clear();
-      if (direction_plant != nullptr) {
-        Trajectory direction;
-        direction_plant->Run(measured.x0, controllers_[active_], &direction);
-        AcceptNominal(direction, r.cost);
-      } else {
-        AcceptNominal(measured, r.cost);
-      }
+      AdoptTrial(measured, direction_plant, r.cost);
       accepted_ = active_;
       active_ = 1 - active_;
       rejections_ = 0;
