@@ -440,6 +440,16 @@ struct CyclicLq {
     traj.T = Vector::Constant(1, T);
     traj.x0 = traj.modes[0].x.col(0);
   }
+  // kRiccati without regularization, swept until P(0) is settled to 1e-12.
+  static BackwardPassSettings Settings(double cyclic_value) {
+    BackwardPassSettings settings;
+    settings.equation = BackwardEquation::kRiccati;
+    settings.riccati_regularization = 0;
+    settings.cyclic_value = cyclic_value;
+    settings.cyclic_max_sweeps = 200;
+    settings.cyclic_tolerance = 1e-12;
+    return settings;
+  }
   // P(0) of dP/dt = -(2 a P + q - P^2 b^2 / r) from P(T) = PT, fine RK4, written here.
   double Flow(double PT) const {
     auto f = [&](double P) { return 2 * a * P + q - P * P * b * b / r; };
@@ -459,12 +469,7 @@ TEST(BackwardPass, CyclicValueConvergesToTheStationaryRiccatiSolution) {
   // gamma_c = 1: the periodic solution of a time-invariant LQ problem is the algebraic Riccati
   // solution 2 a P + q - P^2 b^2 / r = 0, P = r (a + sqrt(a^2 + q b^2 / r)) / b^2.
   CyclicLq lq;
-  BackwardPassSettings settings;
-  settings.equation = BackwardEquation::kRiccati;
-  settings.riccati_regularization = 0;
-  settings.cyclic_value = 1.0;
-  settings.cyclic_max_sweeps = 200;
-  settings.cyclic_tolerance = 1e-12;
+  const BackwardPassSettings settings = CyclicLq::Settings(1.0);
   BackwardPass pass;
   pass.Allocate(lq.problem, 100, settings);
   pass.Run(lq.traj);
@@ -494,12 +499,7 @@ TEST(BackwardPass, CyclicValueConvergesToTheStationaryRiccatiSolution) {
 TEST(BackwardPass, DiscountedCyclicValueIsAFixedPointOfTheCycleMap) {
   // gamma_c < 1: P0 = Flow(gamma_c P0), checked with the independent RK4 flow above.
   CyclicLq lq;
-  BackwardPassSettings settings;
-  settings.equation = BackwardEquation::kRiccati;
-  settings.riccati_regularization = 0;
-  settings.cyclic_value = 0.6;
-  settings.cyclic_max_sweeps = 200;
-  settings.cyclic_tolerance = 1e-12;
+  const BackwardPassSettings settings = CyclicLq::Settings(0.6);
   BackwardPass pass;
   pass.Allocate(lq.problem, 100, settings);
   pass.Run(lq.traj);

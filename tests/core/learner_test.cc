@@ -54,6 +54,12 @@ struct LqProblem {
   }
 };
 
+// u = 0 with planned durations (1, 1): the initial law u^0, T^0 of most tests.
+FunctionPolicy ZeroInputPolicy() {
+  return FunctionPolicy(Eigen::Vector2d(1.0, 1.0),
+                        [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+}
+
 // Riccati in backward time: dS/ds = A'S + SA - S B B' S / r + Q, classical RK4.
 Eigen::Matrix2d RiccatiStep(const Eigen::Matrix2d& S, const Eigen::Matrix2d& A,
                             const Eigen::Vector2d& B, const Eigen::Matrix2d& Q, double r,
@@ -122,8 +128,7 @@ TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
   ModelPlantSettings ps;
   ps.dt = 1e-3;
   ModelPlant plant(p.problem, ps);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   LearnerSettings settings = TestSettings();
   settings.backward.use_previous_du = GetParam() == 1;
   if (GetParam() == 2) {
@@ -160,8 +165,7 @@ struct MethodCosts {
 MethodCosts RunThreeMethods(LqProblem& model, LqProblem& truth) {
   ModelPlant model_plant(model.problem);
   ModelPlant real_plant(truth.sys, model.problem.bounds);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   const Vector x0 = model.lq.x0;
   MethodCosts out;
   // Costs are always evaluated with the same cost functional (the model's; costs are exact).
@@ -215,8 +219,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   TwoModeLq lq;
   LqProblem p(lq);
   ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   LearnerSettings settings = TestSettings();
   settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
   settings.gamma = 0.5;
@@ -343,8 +346,7 @@ TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
   TwoModeLq lq;
   LqProblem p(lq);
   ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   LearnerSettings settings = TestSettings();
   settings.c = 1e6;  // every trial is rejected
   settings.rebaseline_after = 2;
@@ -383,8 +385,7 @@ TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
   LqProblem p(lq), q(lq);
   q.cost.r_[1] = Eigen::Vector2d(0.3, -0.2);
   ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   Trajectory measured;
   plant.Run(lq.x0, initial, &measured);
   Learner learner(p.problem, TestSettings()), reference(q.problem, TestSettings());
@@ -407,8 +408,7 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   TwoModeLq lq;
   LqProblem p(lq);
   ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   LearnerSettings settings = TestSettings();
   settings.alpha_min = 0.3;  // two rejections in a row terminate
   Learner learner(p.problem, settings);
@@ -448,8 +448,7 @@ TEST(Learner, FullRiccatiVariantDecreasesTheCost) {
   TwoModeLq lq;
   LqProblem p(lq);
   ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  FunctionPolicy initial = ZeroInputPolicy();
   LearnerSettings settings = TestSettings();
   settings.backward.equation = BackwardEquation::kRiccati;
   settings.backward.riccati_regularization = settings.controller.regularization;
