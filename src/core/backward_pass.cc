@@ -336,6 +336,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
     throw InvalidArgument("BackwardPassSettings: riccati_regularization = " +
                           std::to_string(settings.riccati_regularization) + ", expected >= 0");
   }
+  if (!(settings.cyclic_value >= 0.0 && settings.cyclic_value <= 1.0)) {
+    throw InvalidArgument("BackwardPassSettings: cyclic_value = " +
+                          std::to_string(settings.cyclic_value) + ", expected in [0, 1]");
+  }
   normalization_ = std::make_unique<TimeNormalization>(problem);
   const SwitchedSystem& sys = *problem.system;
   K_ = sys.num_modes();
@@ -364,10 +368,6 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   cyclic_G_.setZero(n_max_, n_max_);
   cyclic_tmp_.setZero(n_max_, n_max_);
   cyclic_valid_ = false;
-  if (!(settings.cyclic_value >= 0.0 && settings.cyclic_value <= 1.0)) {
-    throw InvalidArgument("BackwardPassSettings: cyclic_value = " +
-                          std::to_string(settings.cyclic_value) + ", expected in [0, 1]");
-  }
   tmp_.setZero(nz_max_, nz_max_);
   P_.setZero(nz_max_, nz_max_);
   p_.setZero(nz_max_);
