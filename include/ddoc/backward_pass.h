@@ -105,6 +105,18 @@ struct BackwardPassSettings {
   /// which the sweeps stop.
   int cyclic_max_sweeps = 30;
   double cyclic_tolerance = 1e-4;
+  /// Event-terminated horizon, NOT in the paper (default false: the paper's terminal
+  /// condition P(K) = Phi_{K,zz}, p(K) = Phi_{K,z}). On a plant whose last mode ends at a
+  /// state event (a hopper's takeoff) the terminal cost is measured AT the event, so a
+  /// deviation along the flow f_{K-1} at the end only moves the event and changes nothing.
+  /// With this option, when the system provides SwitchedSystem::GuardGradient for the last
+  /// mode, the terminal cost (and the cycle reset of cyclic_value) is taken through
+  ///   Pi = I - f gamma_x^T / (gamma_x^T f)      at the nominal's last sample,
+  /// i.e. P(K) = Pi^T Phi_{K,xx} Pi, p(K) = Pi^T Phi_{K,x} - l gamma_x / (gamma_x^T f) (state
+  /// blocks; the last term is the running cost l of the time the event gains). Intermediate
+  /// switches keep the paper's G_{k,x}: there T_k is a decision variable tied to the event by
+  /// the surface penalty (8), whose gradient the projection would remove.
+  bool terminal_event = false;
 };
 
 /// The backward pass (30), derived from (26)-(29) with delta-lambda = P delta-z + p:
@@ -225,6 +237,11 @@ class BackwardPass {
   Vector phiz_;           // nz_max
   Matrix phizz_;          // nz_max x nz_max
   Matrix Gz_;             // nz_max x nz_max (rectangular top-left block used)
+  Vector event_f_;        // n_max: f_k at the pre-switch sample (terminal_event)
+  Vector event_hx_;       // n_max: guard gradient
+  Matrix event_Pi_;       // n_max x n_max: the projection Pi_k
+  Matrix event_tmp_;      // nz_max x nz_max
+  double event_rate_ = 0; // gamma_x^T f at that sample
   Matrix tmp_;            // nz_max x nz_max
   Matrix P_;              // nz_max x nz_max: current P
   Vector p_;              // nz_max: current p
@@ -248,6 +265,9 @@ class BackwardPass {
   bool cyclic_valid_ = false;
   int sweeps_ = 0;
   void Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
+  // terminal_event: Pi_k into event_Pi_ (n_k x n_k) at mode k's last nominal sample.
+  // Returns false (Pi = I) when the system has no guard or the flow is tangent to it.
+  bool EventProjection(int k, const Trajectory& nominal);
   BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
   bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }
   void Invert(Coefficients* c);

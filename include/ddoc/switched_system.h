@@ -75,6 +75,12 @@ class SwitchedSystem {
   void Surface(int k, const ConstVectorRef& x, VectorRef h) const;
   /// hx = dh_k/dx, s_k x n_k. Only for s_k > 0.
   void SurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const;
+  /// Optional, for plants whose switches are triggered by a state event: hx = d gamma_k / dx
+  /// (size n_k) of the scalar guard gamma_k(x, u) whose zero crossing ends mode k on the plant
+  /// (a hopper's foot height at touchdown, its leg force at takeoff). Returns false when the
+  /// system does not provide it (the default). Used by
+  /// BackwardPassSettings::terminal_event. Unlike Surface, it adds no cost.
+  bool GuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef hx) const;
 
  protected:
   /// state_dims: n_k for each mode (non-empty, each > 0); input_dim: m > 0;
@@ -90,6 +96,8 @@ class SwitchedSystem {
   virtual void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const = 0;
   virtual void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const;
   virtual void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const;
+  virtual bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                               VectorRef hx) const;
 
  private:
   std::vector<int> state_dims_;    // n_k, size K

@@ -364,6 +364,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   phiz_.setZero(nz_max_);
   phizz_.setZero(nz_max_, nz_max_);
   Gz_.setZero(nz_max_, nz_max_);
+  event_f_.setZero(n_max_);
+  event_hx_.setZero(n_max_);
+  event_Pi_.setZero(n_max_, n_max_);
+  event_tmp_.setZero(nz_max_, nz_max_);
   cyclic_P0_.setZero(n_max_, n_max_);
   cyclic_G_.setZero(n_max_, n_max_);
   cyclic_tmp_.setZero(n_max_, n_max_);
@@ -683,6 +687,11 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     const ModeTrajectory& last = nominal.modes[K_ - 1];
     problem_->system->ResetDerivative(K_ - 1, last.x.col(last.num_samples() - 1),
                                       cyclic_G_.topLeftCorner(n0, nK));
+    if (settings_.terminal_event && EventProjection(K_ - 1, nominal)) {
+      auto tmp = cyclic_tmp_.topLeftCorner(n0, nK);
+      tmp.noalias() = cyclic_G_.topLeftCorner(n0, nK) * event_Pi_.topLeftCorner(nK, nK);
+      cyclic_G_.topLeftCorner(n0, nK) = tmp;
+    }
   }
   if (!cyclic_valid_) cyclic_P0_.topLeftCorner(n0, n0).setZero();
   sweeps_ = 0;
@@ -714,6 +723,21 @@ void BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
     auto phiz = phiz_.head(nz);
     auto phizz = phizz_.topLeftCorner(nz, nz);
     normalization_->SwitchingDerivatives(k, z, phiz, phizz);
+    // terminal_event: the horizon ends at the plant's event t_e. A deviation dx at the
+    // planned end moves the event by dt_e = -gamma_x dx / (gamma_x f); to first order the
+    // cost changes by Phi_x (dx + f dt_e) + l dt_e, so
+    //   p_x(K) = Pi^T Phi_x - (l / gamma_x f) gamma_x,   P_xx(K) = Pi^T Phi_xx Pi.
+    if (k == K_ - 1 && settings_.terminal_event && EventProjection(k, nominal)) {
+      auto Pi = event_Pi_.topLeftCorner(n, n);
+      auto tmp = event_tmp_.topLeftCorner(n, n);
+      tmp.noalias() = phizz.topLeftCorner(n, n) * Pi;
+      phizz.topLeftCorner(n, n).noalias() = Pi.transpose() * tmp;
+      auto v = event_f_.head(n);  // f is no longer needed: scratch for Pi^T Phi_x
+      v.noalias() = Pi.transpose() * phiz.head(n);
+      const ModeTrajectory& mode = nominal.modes[k];
+      const double l = problem_->cost->Running(k, mode.x.col(N - 1), mode.u.col(N - 1));
+      phiz.head(n) = v - (l / event_rate_) * event_hx_.head(n);
+    }
     if (settings_.psd_switching_hessians) {
       const Matrix sym = 0.5 * (phizz + phizz.transpose());
       Eigen::SelfAdjointEigenSolver<Matrix> eig(sym);
@@ -760,6 +784,24 @@ void BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       std::swap(hi, lo);
     }
   }
+}
+
+bool BackwardPass::EventProjection(int k, const Trajectory& nominal) {
+  const SwitchedSystem& sys = *problem_->system;
+  const int n = dims_[k];
+  const ModeTrajectory& mode = nominal.modes[k];
+  const int last = mode.num_samples() - 1;
+  auto hx = event_hx_.head(n);
+  if (!sys.GuardGradient(k, mode.x.col(last), mode.u.col(last), hx)) return false;
+  auto f = event_f_.head(n);
+  sys.Flow(k, mode.x.col(last), mode.u.col(last), f);
+  const double rate = hx.dot(f);  // d gamma / dt at the switch
+  if (!(std::abs(rate) > 1e-9 * (hx.norm() * f.norm() + 1e-300))) return false;
+  event_rate_ = rate;
+  auto Pi = event_Pi_.topLeftCorner(n, n);
+  Pi.setIdentity();
+  for (int j = 0; j < n; ++j) Pi.col(j) -= f * (hx(j) / rate);
+  return true;
 }
 
 }  // namespace ddoc

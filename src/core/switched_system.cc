@@ -183,6 +183,22 @@ void SwitchedSystem::SurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef
   DoSurfaceDerivative(k, x, hx);
 }
 
+bool SwitchedSystem::GuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                                   VectorRef hx) const {
+  const int n = state_dim(k);
+  CheckSize("GuardGradient", k, "x", x, n);
+  CheckSize("GuardGradient", k, "u", u, input_dim_);
+  CheckSize("GuardGradient", k, "hx", hx, n);
+  CheckFinite("GuardGradient", k, "x", x);
+  CheckFinite("GuardGradient", k, "u", u);
+  return DoGuardGradient(k, x, u, hx);
+}
+
+bool SwitchedSystem::DoGuardGradient(int, const ConstVectorRef&, const ConstVectorRef&,
+                                     VectorRef) const {
+  return false;
+}
+
 void SwitchedSystem::DoSurface(int k, const ConstVectorRef&, VectorRef) const {
   throw InvalidArgument("Surface(k=" + std::to_string(k) +
                         "): s_k > 0 but the system does not implement DoSurface");

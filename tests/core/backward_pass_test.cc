@@ -246,6 +246,141 @@ TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
   EXPECT_GT(std::abs(fd_u), 0.05);
 }
 
+// NonlinearSystem's dynamics and resets, but only the LAST mode ends at a state event, its
+// surface h_2 = 0.16 - x0 - 0.5 x2 - 2 x1^2, which it also reports as its guard: on ModelPlant
+// modes 0 and 1 are time-based and mode 2 ends where h_2 crosses zero (after about 2 s).
+class EventEndSystem : public AutoDiffSystem<EventEndSystem> {
+ public:
+  EventEndSystem() : AutoDiffSystem<EventEndSystem>({3, 2, 3}, 2, {0, 0, 1}) {}
+  NonlinearSystem base;
+  template <class S>
+  void Dynamics(int k, const VectorX<S>& x, const VectorX<S>& u, VectorX<S>& xdot) const {
+    base.Dynamics(k, x, u, xdot);
+  }
+  template <class S>
+  void ResetMap(int k, const VectorX<S>& x, VectorX<S>& x_next) const {
+    base.ResetMap(k, x, x_next);
+  }
+  template <class S>
+  void SurfaceMap(int, const VectorX<S>& x, VectorX<S>& h) const {
+    h(0) = 0.16 - x(0) - 0.5 * x(2) - 2.0 * x(1) * x(1);
+  }
+
+ protected:
+  bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef&,
+                       VectorRef hx) const override {
+    if (k != 2) return false;
+    hx << -1.0, -4.0 * x(1), -0.5;
+    return true;
+  }
+};
+
+// Input of the event test: tau-dependent in modes 0 and 1, constant in mode 2, so that the
+// nominal's event time does not depend on the planned D_2 (which is then set to it).
+void EventBaseInput(int k, double tau, VectorRef u) {
+  if (k < 2) {
+    BaseInput(k, tau, u);
+  } else {
+    u << 0.25, -0.15;
+  }
+}
+
+double EventEndCost(const Problem& problem, const Vector& D, double eps, Trajectory* out = nullptr) {
+  ModelPlantSettings ps;
+  ps.dt = 2e-4;
+  ModelPlant plant(problem, ps);  // default guard: time-based modes 0, 1; h_2 ends mode 2
+  FunctionPolicy policy(D, [eps](int k, double tau, const ConstVectorRef&, VectorRef u) {
+    EventBaseInput(k, tau, u);
+    Vector v(2);
+    Direction(k, tau, v);
+    u += eps * v;
+  });
+  Vector x0(3);
+  x0 << 0.2, -0.1, 0.3;
+  Trajectory traj;
+  plant.Run(x0, policy, &traj);
+  if (out) *out = traj;
+  return EvaluateCost(problem, traj).total;
+}
+
+// int (L_u + F_u^T p) . v dtau, the backward pass's directional derivative along Direction.
+double PredictedDirectionalDerivative(const BackwardPass& pass, int K) {
+  double predicted = 0;
+  for (int k = 0; k < K; ++k) {
+    double prev = 0;
+    for (int j = 0; j < pass.num_samples(k); ++j) {
+      Vector v(2);
+      Direction(k, pass.tau(k, j), v);
+      const double cur = pass.Feedforward(k, j).dot(v);
+      if (j > 0) predicted += 0.5 * (pass.tau(k, j) - pass.tau(k, j - 1)) * (prev + cur);
+      prev = cur;
+    }
+  }
+  return predicted;
+}
+
+TEST(BackwardPass, TerminalEventGivesTheGradientOfTheEventTerminatedCost) {
+  EventEndSystem sys;
+  NonlinearCost cost;
+  Problem problem;
+  problem.system = &sys;
+  problem.cost = &cost;
+  problem.bounds.u_min = Vector::Constant(2, -5);
+  problem.bounds.u_max = Vector::Constant(2, 5);
+  problem.bounds.duration_min = Vector::Constant(3, 0.1);
+  problem.bounds.duration_max = Vector::Constant(3, 3.0);
+  problem.surface_weights = Vector::Zero(3);
+
+  Vector D(3);
+  D << 0.50013, 0.40007, 3.0;
+  Trajectory probe;
+  EventEndCost(problem, D, 0.0, &probe);
+  ASSERT_LT(probe.T(2) - probe.T(1), 2.9) << "mode 2 must end at its event, not at duration_max";
+  D(2) = probe.T(2) - probe.T(1);  // the planned clock of mode 2 ends at the nominal's event
+  Trajectory nominal;
+  EventEndCost(problem, D, 0.0, &nominal);
+  ASSERT_NEAR(nominal.T(2), probe.T(2), 1e-9);
+
+  BackwardPass pass;
+  BackwardPassSettings settings;
+  settings.terminal_event = true;
+  pass.Allocate(problem, nominal.total_samples(), settings);
+  pass.Run(nominal);
+  const double predicted = PredictedDirectionalDerivative(pass, 3);
+
+  BackwardPass paper;  // the paper's terminal condition, for contrast
+  paper.Allocate(problem, nominal.total_samples());
+  paper.Run(nominal);
+  const double predicted_paper = PredictedDirectionalDerivative(paper, 3);
+
+  const double e = 1e-4;
+  const double fd = (EventEndCost(problem, D, e) - EventEndCost(problem, D, -e)) / (2 * e);
+  EXPECT_NEAR(predicted, fd, 2e-3 * std::abs(fd));
+  // The paper's fixed-time terminal condition predicts a different derivative here, by far
+  // more than the tolerance: the event moves and the terminal state slides along the flow.
+  EXPECT_GT(std::abs(predicted_paper - fd), 20 * 2e-3 * std::abs(fd))
+      << "paper " << predicted_paper << " event " << predicted << " fd " << fd;
+  std::printf("event-terminated dJ/deps: fd %.6f, terminal_event %.6f, paper %.6f\n", fd,
+              predicted, predicted_paper);
+}
+
+TEST(BackwardPass, TerminalEventIsTheIdentityWithoutAGuardGradient) {
+  NonlinearSetup setup;  // NonlinearSystem does not provide GuardGradient
+  Vector D(3);
+  D << 0.50013, 0.40007, 0.60011;
+  Trajectory nominal;
+  SimulatedCost(setup, D, 0.0, &nominal);
+  BackwardPassSettings with;
+  with.terminal_event = true;
+  BackwardPass a, b;
+  a.Allocate(setup.problem, nominal.total_samples());
+  b.Allocate(setup.problem, nominal.total_samples(), with);
+  a.Run(nominal);
+  b.Run(nominal);
+  EXPECT_EQ(a.p2_initial(), b.p2_initial());
+  EXPECT_EQ(a.Feedforward(0, 0), b.Feedforward(0, 0));
+}
+
 TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
   // dP/dt = -(2 a P + q - P^2 b^2 / r), P(T) = s, integrated independently with fine RK4.
   const ScalarLqSetup setup{ScalarLq{}};
