@@ -187,6 +187,20 @@ void HopperModel::DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef 
   hx(0, hopper::kTheta) = x(hopper::kR) * std::sin(x(hopper::kTheta));
 }
 
+bool HopperModel::DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                                  VectorRef hx) const {
+  (void)u;  // F0 enters the takeoff guard additively
+  if (k == hopper::kFlight) {  // the foot height: the touchdown surface's gradient
+    Eigen::Map<Eigen::MatrixXd> row(hx.data(), 1, hx.size());
+    DoSurfaceDerivative(k, x, row);
+    return true;
+  }
+  hx.setZero();
+  hx(hopper::kSR) = -x(hopper::kSKleg);
+  hx(hopper::kSKleg) = -(x(hopper::kSR) - params_.r0);
+  return true;
+}
+
 // Explicit double instantiations, so the templated right-hand sides are usable outside src/hopper.
 template void HopperModel::FlightRhs<double>(const Eigen::Matrix<double, 14, 1>&,
                                              const Eigen::Matrix<double, 4, 1>&,

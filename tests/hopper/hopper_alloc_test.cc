@@ -34,6 +34,8 @@ TEST(HopperAllocTest, ModelAndCostEvaluationsDoNotAllocate) {
   model.SurfaceDerivative(0, xf, hx);
   model.Guard(0, xf, u);
   model.Guard(1, xs, u);
+  model.GuardGradient(0, xf, u, lx14);
+  model.GuardGradient(1, xs, u, lx10);
   cost.Running(0, xf, u);
   cost.RunningDerivatives(0, xf, u, lx14, lu, lxx14, luu, lux14);
   cost.Switching(0, xf);

@@ -213,6 +213,28 @@ TEST(HopperModelTest, GuardsAndFootKinematics) {
   EXPECT_THROW(model.Guard(1, x, u), InvalidArgument);
 }
 
+TEST(HopperModelTest, GuardGradientMatchesFiniteDifferencesOfTheGuard) {
+  HopperModel model{HopperParams()};
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::Vector4d u = RandomInput(&rng);
+    for (int k = 0; k < 2; ++k) {
+      Eigen::VectorXd x = k == 0 ? Eigen::VectorXd(RandomFlight(&rng))
+                                 : Eigen::VectorXd(RandomStance(&rng));
+      Eigen::VectorXd hx(x.size());
+      ASSERT_TRUE(model.GuardGradient(k, x, u, hx));
+      for (int i = 0; i < x.size(); ++i) {
+        const double e = 1e-6 * std::max(1.0, std::abs(x(i)));
+        Eigen::VectorXd xp = x, xm = x;
+        xp(i) += e;
+        xm(i) -= e;
+        const double fd = (model.Guard(k, xp, u) - model.Guard(k, xm, u)) / (2 * e);
+        EXPECT_NEAR(hx(i), fd, 1e-6 * std::max(1.0, std::abs(fd))) << "k " << k << " i " << i;
+      }
+    }
+  }
+}
+
 TEST(HopperModelTest, InvalidParametersNameTheField) {
   HopperParams p;
   p.J_leg = 0.0;

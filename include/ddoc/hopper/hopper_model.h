@@ -139,6 +139,9 @@ class HopperModel : public SwitchedSystem {
   void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const override;
   void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override;
   void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const override;
+  /// d Guard / dx: flight, the foot height's gradient; stance, -k_leg on r and -(r - r0) on k_leg.
+  bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                       VectorRef hx) const override;
 
  private:
   HopperParams params_;
