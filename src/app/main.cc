@@ -210,6 +210,7 @@ int Run(int argc, char** argv) {
   if (l.gamma) config.learner.gamma = *l.gamma;
   if (l.epsilon) config.learner.epsilon = *l.epsilon;
   if (l.delta_i) config.learner.delta_i = *l.delta_i;
+  if (l.initial_hops) config.initial_hops = *l.initial_hops;
   if (l.alpha_min) config.learner.alpha_min = *l.alpha_min;
   if (l.max_duration_step) config.learner.switching.max_duration_step = *l.max_duration_step;
   if (l.alpha_scales_feedback) config.learner.controller.alpha_scales_feedback = *l.alpha_scales_feedback;
@@ -231,6 +232,10 @@ int Run(int argc, char** argv) {
   if (l.cyclic_value) {
     config.learner.backward.cyclic_value = *l.cyclic_value;
     config.model_learner.backward.cyclic_value = *l.cyclic_value;
+  }
+  if (l.terminal_event) {
+    config.learner.backward.terminal_event = *l.terminal_event;
+    config.model_learner.backward.terminal_event = *l.terminal_event;
   }
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();

@@ -140,6 +140,13 @@ Scenario LoadScenario(const std::string& path) {
         }
         l.alpha_scales_feedback = v == "all";
       }
+      if (const char* a = e->Attribute("terminal")) {
+        const std::string v = a;
+        if (v != "time" && v != "event") {
+          Fail(path, line, "<learning> terminal=\"" + v + "\" (expected time or event)");
+        }
+        l.terminal_event = v == "event";
+      }
       if (const char* a = e->Attribute("regularization_scaling")) {
         const std::string v = a;
         if (v != "scalar" && v != "per_input") {
@@ -158,6 +165,12 @@ Scenario LoadScenario(const std::string& path) {
       if (auto di = OptionalDouble(path, e, "delta_i")) {
         if (*di != std::floor(*di) || *di < 1) Fail(path, line, "<learning> delta_i must be an integer >= 1");
         l.delta_i = static_cast<int>(*di);
+      }
+      if (auto ih = OptionalDouble(path, e, "initial_hops")) {
+        if (*ih != std::floor(*ih) || *ih < 1) {
+          Fail(path, line, "<learning> initial_hops must be an integer >= 1");
+        }
+        l.initial_hops = static_cast<int>(*ih);
       }
     } else if (tag == "gait") {
       s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);

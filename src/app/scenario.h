@@ -50,6 +50,7 @@ struct LearningOverrides {
   std::optional<double> gamma;              // backtracking factor
   std::optional<double> epsilon;            // convergence threshold on int|du|^2 + |dT|^2
   std::optional<int> delta_i;               // convergence window (accepted iterations)
+  std::optional<int> initial_hops;          // HopperControllerConfig::initial_hops, >= 1
   std::optional<double> alpha_min;          // line search gives up below this alpha
   std::optional<double> max_duration_step;  // cap on |dD_k| of (31), s
   std::optional<double> regularization;     // mu of (33): L_uu + mu (1 + max|diag L_uu|) I
@@ -60,6 +61,7 @@ struct LearningOverrides {
   std::optional<bool> reset_alpha_on_accept;  // alpha_after_accept="reset" (paper) | "grow"
   std::optional<double> alpha_initial;      // alpha_0 of the line search, in (0, 1]
   std::optional<double> cyclic_value;       // BackwardPassSettings::cyclic_value, in [0, 1]
+  std::optional<bool> terminal_event;       // terminal="time" (paper) | "event" (terminal_event)
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory

@@ -111,6 +111,28 @@ TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
   ExpectError(buf, {"cyclic_value"});
 }
 
+TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, "terminal='event' initial_hops='2'");
+  Scenario s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.terminal_event.has_value());
+  EXPECT_TRUE(*s.learning.terminal_event);
+  ASSERT_TRUE(s.learning.initial_hops.has_value());
+  EXPECT_EQ(*s.learning.initial_hops, 2);
+  std::snprintf(buf, sizeof(buf), fmt, "terminal='time'");
+  s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.terminal_event.has_value());
+  EXPECT_FALSE(*s.learning.terminal_event);
+  EXPECT_FALSE(s.learning.initial_hops.has_value());
+  std::snprintf(buf, sizeof(buf), fmt, "terminal='takeoff'");
+  ExpectError(buf, {"<learning>", "terminal=\"takeoff\"", "time or event"});
+  std::snprintf(buf, sizeof(buf), fmt, "initial_hops='0'");
+  ExpectError(buf, {"initial_hops", ">= 1"});
+  std::snprintf(buf, sizeof(buf), fmt, "initial_hops='1.5'");
+  ExpectError(buf, {"initial_hops", "integer"});
+}
+
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/>", {"s.xml", "malformed XML"});
   ExpectError("<scenario/>", {"<ddoc_scenario>"});

@@ -63,6 +63,7 @@ const char* kUsage =
     "  --reference own|nominal  x_ref of I1 for the learner on the plant\n"
     "  --q-y 0 --q-yd 10    I1 weights of y and yd (experiment; Fig. 2: 0, 10)\n"
     "  --cyclic 0           BackwardPassSettings::cyclic_value (periodic Riccati value)\n"
+    "  --event 0|1          BackwardPassSettings::terminal_event (projected terminal cost)\n"
     "  --rebaseline 0 --isc 0   LearnerSettings::rebaseline_after, initial_state_correction\n"
     "  --kfb 1              OnlineControllerSettings::feedback_scale\n"
     "  --own-start 0|1      re-run (30) with I1's x(0) = the next hop's measured takeoff state\n"
@@ -234,6 +235,7 @@ int main(int argc, char** argv) {
   ls.controller.regularization = a.Get("reg", 0.1);
   ls.controller.feedback_scale = a.Get("kfb", 1.0);
   ls.backward.cyclic_value = a.Get("cyclic", 0.0);
+  ls.backward.terminal_event = a.Get("event", 0) != 0;
   ls.rebaseline_after = static_cast<int>(a.Get("rebaseline", 0));
   ls.initial_state_correction = a.Get("isc", 0) != 0;
   const int riccati = static_cast<int>(a.Get("riccati", 0));
