@@ -1,5 +1,6 @@
 """tools/mass_sweep with the real ddoc-hopper (DDOC_HOPPER, set by CMake): generated robots load in
-MuJoCo, runs are logged, the table names every case; bad usage exits 2 with a message."""
+MuJoCo, runs are logged, the table names every case, speeds and terminal values multiply the
+cases; bad usage exits 2 with a message."""
 import csv
 import os
 import re
@@ -28,11 +29,38 @@ class MassSweepTest(TempDirTest):
         for row in rows:
             self.assertEqual(row["exit"], "0")
             self.assertEqual(row["hops"], "2")  # two hops really ran on the 11 kg robot
-        with open(os.path.join(out, "runs", "m11_ocfb_c0.9", "summary.json")) as f:
+        with open(os.path.join(out, "runs", "m11_v0.5_ocfb_c0.9_time", "summary.json")) as f:
             self.assertIn('"hops": 2', f.read())
         with open(os.path.join(out, "results.md")) as f:
             table = f.read()
         self.assertTrue(re.search(r"\| 11 \| 2 \([0-9.]+\) \| 2 \([0-9.]+\) \|", table), table)
+        self.assertIn("| survived 1/1 | survived 1/1 |", table)
+
+    def test_speeds_and_terminal(self):
+        out = os.path.join(self.tmp, "sweep")
+        r = run_tool("mass_sweep", "--masses", "10", "--speeds", "0.4,0.5", "--methods", "alg1",
+                     "--cyclic", "0", "--terminal", "time,event", "--hops", "3",
+                     "--hopper", HOPPER, "--out", out, "--jobs", "4")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(out, "results.csv")) as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual([(r["speed"], r["terminal"]) for r in rows],
+                         [("0.4", "time"), ("0.4", "event"), ("0.5", "time"), ("0.5", "event")])
+        for row in rows:
+            self.assertEqual((row["mass"], row["method"], row["cyclic_value"], row["exit"],
+                              row["hops"]), ("10.0", "alg1", "0.0", "0", "3"))
+        with open(os.path.join(out, "scenarios", "m10_v0.4_alg1_c0_event.xml")) as f:
+            scenario = f.read()
+        self.assertIn('<gait speed="0.4"/>', scenario)
+        self.assertIn('terminal="event"', scenario)
+        self.assertTrue(os.path.isfile(os.path.join(out, "runs", "m10_v0.5_alg1_c0_time",
+                                                    "summary.json")))
+        with open(os.path.join(out, "results.md")) as f:
+            table = f.read()
+        self.assertIn("| speed [m/s] | robot mass [kg] | alg1 c=0 time | alg1 c=0 event |", table)
+        self.assertTrue(re.search(r"\| 0\.5 \| 10 \| 3 \([0-9.]+\) \| 3 \([0-9.]+\) \|", table),
+                        table)
+        self.assertIn("| survived 2/2 | survived 2/2 |", table)
 
 
 class MassSweepUsageTest(TempDirTest):
@@ -43,6 +71,13 @@ class MassSweepUsageTest(TempDirTest):
         r = run_tool("mass_sweep", "--cyclic", "2", "--out", self.tmp)
         self.assertEqual(r.returncode, 2)
         self.assertIn("--cyclic", r.stderr)
+        r = run_tool("mass_sweep", "--terminal", "time,evnt", "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--terminal", r.stderr)
+        self.assertIn("evnt", r.stderr)
+        r = run_tool("mass_sweep", "--speed", "fast", "--out", self.tmp)  # --speed: old alias
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("fast", r.stderr)
         r = run_tool("mass_sweep", "--hopper", os.path.join(self.tmp, "nope"), "--out", self.tmp)
         self.assertEqual(r.returncode, 2)
         self.assertIn("ddoc-hopper not found", r.stderr)
