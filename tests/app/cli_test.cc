@@ -171,4 +171,17 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
 }
 
+TEST_F(CliTest, EveryShippedScenarioRuns) {
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(std::string(DDOC_MODELS_DIR) + "/scenarios")) {
+    if (entry.path().extension() != ".xml") continue;
+    ++count;
+    const std::string name = entry.path().stem().string();
+    const Result r = RunCli(entry.path().string() + " --hops 4 --no-pushes --out " + Out(name));
+    EXPECT_EQ(r.code, 0) << name << ": " << r.output;
+  }
+  EXPECT_GE(count, 8);
+}
+
 }  // namespace
+
