@@ -182,14 +182,16 @@ void Direction(int, double tau, VectorRef v) {
   v(1) = std::sin(2.5 * tau + 0.3);
 }
 
-double SimulatedCost(const NonlinearSetup& setup, const Vector& durations, double eps,
-                     Trajectory* out = nullptr) {
+// Cost of a ModelPlant rollout from x0 = (0.2, -0.1, 0.3) with u = base(k, tau) + eps v(tau).
+using InputFunction = void (*)(int k, double tau, VectorRef u);
+double PerturbedCost(const Problem& problem, bool time_based_only, InputFunction base,
+                     const Vector& durations, double eps, Trajectory* out) {
   ModelPlantSettings ps;
   ps.dt = 2e-4;
-  ps.time_based_only = true;
-  ModelPlant plant(setup.problem, ps);
-  FunctionPolicy policy(durations, [eps](int k, double tau, const ConstVectorRef&, VectorRef u) {
-    BaseInput(k, tau, u);
+  ps.time_based_only = time_based_only;
+  ModelPlant plant(problem, ps);
+  FunctionPolicy policy(durations, [base, eps](int k, double tau, const ConstVectorRef&, VectorRef u) {
+    base(k, tau, u);
     Vector v(2);
     Direction(k, tau, v);
     u += eps * v;
@@ -199,7 +201,28 @@ double SimulatedCost(const NonlinearSetup& setup, const Vector& durations, doubl
   Trajectory traj;
   plant.Run(x0, policy, &traj);
   if (out) *out = traj;
-  return EvaluateCost(setup.problem, traj).total;
+  return EvaluateCost(problem, traj).total;
+}
+
+double SimulatedCost(const NonlinearSetup& setup, const Vector& durations, double eps,
+                     Trajectory* out = nullptr) {
+  return PerturbedCost(setup.problem, true, BaseInput, durations, eps, out);
+}
+
+// int (L_u + F_u^T p) . v dtau, the backward pass's directional derivative along Direction.
+double PredictedDirectionalDerivative(const BackwardPass& pass, int K) {
+  double predicted = 0;
+  for (int k = 0; k < K; ++k) {
+    double prev = 0;
+    for (int j = 0; j < pass.num_samples(k); ++j) {
+      Vector v(2);
+      Direction(k, pass.tau(k, j), v);
+      const double cur = pass.Feedforward(k, j).dot(v);
+      if (j > 0) predicted += 0.5 * (pass.tau(k, j) - pass.tau(k, j - 1)) * (prev + cur);
+      prev = cur;
+    }
+  }
+  return predicted;
 }
 
 TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
@@ -227,17 +250,7 @@ TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
   }
 
   // Directional derivative w.r.t. u(.) along v(tau): int (L_u + F_u^T p) . v dtau.
-  double predicted = 0;
-  for (int k = 0; k < 3; ++k) {
-    double prev = 0;
-    for (int j = 0; j < pass.num_samples(k); ++j) {
-      Vector v(2);
-      Direction(k, pass.tau(k, j), v);
-      const double cur = pass.Feedforward(k, j).dot(v);
-      if (j > 0) predicted += 0.5 * (pass.tau(k, j) - pass.tau(k, j - 1)) * (prev + cur);
-      prev = cur;
-    }
-  }
+  const double predicted = PredictedDirectionalDerivative(pass, 3);
   const double eu = 1e-4;
   const double fd_u = (SimulatedCost(setup, D, eu) - SimulatedCost(setup, D, -eu)) / (2 * eu);
   EXPECT_NEAR(predicted, fd_u, 2e-3 * std::abs(fd_u));
@@ -285,49 +298,16 @@ void EventBaseInput(int k, double tau, VectorRef u) {
   }
 }
 
+// Default guard: modes 0 and 1 are time-based, h_2 ends mode 2.
 double EventEndCost(const Problem& problem, const Vector& D, double eps, Trajectory* out = nullptr) {
-  ModelPlantSettings ps;
-  ps.dt = 2e-4;
-  ModelPlant plant(problem, ps);  // default guard: time-based modes 0, 1; h_2 ends mode 2
-  FunctionPolicy policy(D, [eps](int k, double tau, const ConstVectorRef&, VectorRef u) {
-    EventBaseInput(k, tau, u);
-    Vector v(2);
-    Direction(k, tau, v);
-    u += eps * v;
-  });
-  Vector x0(3);
-  x0 << 0.2, -0.1, 0.3;
-  Trajectory traj;
-  plant.Run(x0, policy, &traj);
-  if (out) *out = traj;
-  return EvaluateCost(problem, traj).total;
-}
-
-// int (L_u + F_u^T p) . v dtau, the backward pass's directional derivative along Direction.
-double PredictedDirectionalDerivative(const BackwardPass& pass, int K) {
-  double predicted = 0;
-  for (int k = 0; k < K; ++k) {
-    double prev = 0;
-    for (int j = 0; j < pass.num_samples(k); ++j) {
-      Vector v(2);
-      Direction(k, pass.tau(k, j), v);
-      const double cur = pass.Feedforward(k, j).dot(v);
-      if (j > 0) predicted += 0.5 * (pass.tau(k, j) - pass.tau(k, j - 1)) * (prev + cur);
-      prev = cur;
-    }
-  }
-  return predicted;
+  return PerturbedCost(problem, false, EventBaseInput, D, eps, out);
 }
 
 TEST(BackwardPass, TerminalEventGivesTheGradientOfTheEventTerminatedCost) {
   EventEndSystem sys;
-  NonlinearCost cost;
-  Problem problem;
+  NonlinearSetup setup;  // its cost and input bounds, with the event-ended system
+  Problem& problem = setup.problem;
   problem.system = &sys;
-  problem.cost = &cost;
-  problem.bounds.u_min = Vector::Constant(2, -5);
-  problem.bounds.u_max = Vector::Constant(2, 5);
-  problem.bounds.duration_min = Vector::Constant(3, 0.1);
   problem.bounds.duration_max = Vector::Constant(3, 3.0);
   problem.surface_weights = Vector::Zero(3);
 
