@@ -161,16 +161,7 @@ struct NonlinearSetup {
   NonlinearSystem sys;
   NonlinearCost cost;
   Problem problem;
-  NonlinearSetup() {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(2, -5);
-    problem.bounds.u_max = Vector::Constant(2, 5);
-    problem.bounds.duration_min = Vector::Constant(3, 0.1);
-    problem.bounds.duration_max = Vector::Constant(3, 2.0);
-    problem.surface_weights = Vector(3);
-    problem.surface_weights << 0.7, 0.0, 0.4;
-  }
+  NonlinearSetup() : problem(MakeNonlinearProblem(sys, cost)) {}
 };
 
 void BaseInput(int k, double tau, VectorRef u) {

@@ -15,19 +15,6 @@ namespace ddoc {
 namespace testing {
 namespace {
 
-Problem MakeNonlinearProblem(const NonlinearSystem& sys, const NonlinearCost& cost) {
-  Problem p;
-  p.system = &sys;
-  p.cost = &cost;
-  p.bounds.u_min = Vector::Constant(2, -5);
-  p.bounds.u_max = Vector::Constant(2, 5);
-  p.bounds.duration_min = Vector::Constant(3, 0.1);
-  p.bounds.duration_max = Vector::Constant(3, 2.0);
-  p.surface_weights = Vector(3);
-  p.surface_weights << 0.7, 0.0, 0.4;
-  return p;
-}
-
 TEST(Derivatives, AutoDiffModelPassesCheckDerivativesInEveryMode) {
   NonlinearSystem sys;
   NonlinearCost cost;

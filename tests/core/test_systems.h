@@ -178,6 +178,21 @@ class NonlinearCost : public AutoDiffCost<NonlinearCost> {
   }
 };
 
+/// The 3-mode nonlinear problem of the derivative and backward-pass tests: |u_i| <= 5, mode
+/// durations in [0.1, 2], surface penalties (0.7, 0, 0.4). `sys` has NonlinearSystem's dimensions.
+inline Problem MakeNonlinearProblem(const SwitchedSystem& sys, const SwitchedCost& cost) {
+  Problem p;
+  p.system = &sys;
+  p.cost = &cost;
+  p.bounds.u_min = Vector::Constant(2, -5);
+  p.bounds.u_max = Vector::Constant(2, 5);
+  p.bounds.duration_min = Vector::Constant(3, 0.1);
+  p.bounds.duration_max = Vector::Constant(3, 2.0);
+  p.surface_weights = Vector(3);
+  p.surface_weights << 0.7, 0.0, 0.4;
+  return p;
+}
+
 }  // namespace testing
 }  // namespace ddoc
 
