@@ -107,14 +107,18 @@ std::string TempDir(const char* name) {
       .string();
 }
 
-void BM_RenderReadPixels(benchmark::State& state) {
-  Sim sim;
+// A 640x480 renderer for sim, or nullptr after marking the benchmark skipped with the reason.
+std::unique_ptr<ddoc::OffscreenRenderer> CreateOrSkip(const Sim& sim, benchmark::State& state) {
   std::string error;
   auto renderer = ddoc::OffscreenRenderer::Create(sim.m, Settings(""), &error);
-  if (!renderer) {
-    state.SkipWithError(error.c_str());
-    return;
-  }
+  if (!renderer) state.SkipWithError(error.c_str());
+  return renderer;
+}
+
+void BM_RenderReadPixels(benchmark::State& state) {
+  Sim sim;
+  auto renderer = CreateOrSkip(sim, state);
+  if (!renderer) return;
   std::vector<unsigned char> rgb;
   ddoc::Overlay overlay;
   overlay.method = "Algorithm 1";
@@ -138,11 +142,8 @@ BENCHMARK(BM_RenderReadPixels)
 void BM_EncodePng(benchmark::State& state) {
   Sim sim;
   std::string error;
-  auto renderer = ddoc::OffscreenRenderer::Create(sim.m, Settings(""), &error);
-  if (!renderer) {
-    state.SkipWithError(error.c_str());
-    return;
-  }
+  auto renderer = CreateOrSkip(sim, state);
+  if (!renderer) return;
   std::vector<unsigned char> rgb, png;
   renderer->Render(sim.m, sim.d, "Method", "Algorithm 1", &rgb);
   for (auto _ : state) {
