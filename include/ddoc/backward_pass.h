@@ -241,7 +241,8 @@ class BackwardPass {
   Vector event_hx_;       // n_max: guard gradient
   Matrix event_Pi_;       // n_max x n_max: the projection Pi_k
   Matrix event_tmp_;      // nz_max x nz_max
-  double event_rate_ = 0; // gamma_x^T f at that sample
+  double event_cost_rate_ = 0;  // l / (gamma_x^T f) at that sample
+  bool terminal_projected_ = false;  // this Run projects the terminal (event_Pi_ is set)
   Matrix tmp_;            // nz_max x nz_max
   Matrix P_;              // nz_max x nz_max: current P
   Vector p_;              // nz_max: current p
@@ -265,8 +266,9 @@ class BackwardPass {
   bool cyclic_valid_ = false;
   int sweeps_ = 0;
   void Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
-  // terminal_event: Pi_k into event_Pi_ (n_k x n_k) at mode k's last nominal sample.
-  // Returns false (Pi = I) when the system has no guard or the flow is tangent to it.
+  // terminal_event: Pi_k into event_Pi_ (n_k x n_k) and l / (gamma_x^T f) into
+  // event_cost_rate_, at mode k's last nominal sample. Returns false (no projection) when the
+  // system has no guard gradient or the flow is tangent to the guard.
   bool EventProjection(int k, const Trajectory& nominal);
   BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
   bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }

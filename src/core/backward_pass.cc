@@ -673,6 +673,8 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     for (int j = 0; j < counts_[k]; ++j) tau_(offsets_[k] + j) = nominal.Tau(k, j);
   }
 
+  // Pi of terminal_event depends only on the nominal's last sample: once per Run, not per sweep.
+  terminal_projected_ = settings_.terminal_event && EventProjection(K_ - 1, nominal);
   const bool cyclic = settings_.cyclic_value > 0 && riccati() &&
                       problem_->system->has_cycle_reset();
   if (!cyclic) {
@@ -687,7 +689,7 @@ void BackwardPass::Run(const Trajectory& nominal, const Matrix* du_prev) {
     const ModeTrajectory& last = nominal.modes[K_ - 1];
     problem_->system->ResetDerivative(K_ - 1, last.x.col(last.num_samples() - 1),
                                       cyclic_G_.topLeftCorner(n0, nK));
-    if (settings_.terminal_event && EventProjection(K_ - 1, nominal)) {
+    if (terminal_projected_) {
       auto tmp = cyclic_tmp_.topLeftCorner(n0, nK);
       tmp.noalias() = cyclic_G_.topLeftCorner(n0, nK) * event_Pi_.topLeftCorner(nK, nK);
       cyclic_G_.topLeftCorner(n0, nK) = tmp;
@@ -727,16 +729,14 @@ void BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
     // planned end moves the event by dt_e = -gamma_x dx / (gamma_x f); to first order the
     // cost changes by Phi_x (dx + f dt_e) + l dt_e, so
     //   p_x(K) = Pi^T Phi_x - (l / gamma_x f) gamma_x,   P_xx(K) = Pi^T Phi_xx Pi.
-    if (k == K_ - 1 && settings_.terminal_event && EventProjection(k, nominal)) {
+    if (k == K_ - 1 && terminal_projected_) {
       auto Pi = event_Pi_.topLeftCorner(n, n);
       auto tmp = event_tmp_.topLeftCorner(n, n);
       tmp.noalias() = phizz.topLeftCorner(n, n) * Pi;
       phizz.topLeftCorner(n, n).noalias() = Pi.transpose() * tmp;
       auto v = event_f_.head(n);  // f is no longer needed: scratch for Pi^T Phi_x
       v.noalias() = Pi.transpose() * phiz.head(n);
-      const ModeTrajectory& mode = nominal.modes[k];
-      const double l = problem_->cost->Running(k, mode.x.col(N - 1), mode.u.col(N - 1));
-      phiz.head(n) = v - (l / event_rate_) * event_hx_.head(n);
+      phiz.head(n) = v - event_cost_rate_ * event_hx_.head(n);
     }
     if (settings_.psd_switching_hessians) {
       const Matrix sym = 0.5 * (phizz + phizz.transpose());
@@ -797,7 +797,7 @@ bool BackwardPass::EventProjection(int k, const Trajectory& nominal) {
   sys.Flow(k, mode.x.col(last), mode.u.col(last), f);
   const double rate = hx.dot(f);  // d gamma / dt at the switch
   if (!(std::abs(rate) > 1e-9 * (hx.norm() * f.norm() + 1e-300))) return false;
-  event_rate_ = rate;
+  event_cost_rate_ = problem_->cost->Running(k, mode.x.col(last), mode.u.col(last)) / rate;
   auto Pi = event_Pi_.topLeftCorner(n, n);
   Pi.setIdentity();
   for (int j = 0; j < n; ++j) Pi.col(j) -= f * (hx(j) / rate);
