@@ -35,6 +35,33 @@ std::optional<double> OptionalDouble(const std::string& file, const tinyxml2::XM
   return value;
 }
 
+// attr="first" or attr="second"; anything else fails naming both.
+std::optional<std::string> OptionalChoice(const std::string& file, const tinyxml2::XMLElement* e,
+                                          const char* attr, const char* first,
+                                          const char* second) {
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return std::nullopt;
+  const std::string v = text;
+  if (v != first && v != second) {
+    Fail(file, e->GetLineNum(),
+         "<" + std::string(e->Name()) + "> " + attr + "=\"" + v + "\" (expected " + first +
+             " or " + second + ")");
+  }
+  return v;
+}
+
+// An integer count >= 1.
+std::optional<int> OptionalCount(const std::string& file, const tinyxml2::XMLElement* e,
+                                 const char* attr) {
+  const std::optional<double> value = OptionalDouble(file, e, attr);
+  if (!value) return std::nullopt;
+  if (*value != std::floor(*value) || *value < 1) {
+    Fail(file, e->GetLineNum(),
+         "<" + std::string(e->Name()) + "> " + attr + " must be an integer >= 1");
+  }
+  return static_cast<int>(*value);
+}
+
 double RequiredDouble(const std::string& file, const tinyxml2::XMLElement* e, const char* attr) {
   auto value = OptionalDouble(file, e, attr);
   if (!value) {
@@ -133,45 +160,20 @@ Scenario LoadScenario(const std::string& path) {
       l.regularization = OptionalDouble(path, e, "regularization");
       l.alpha_initial = OptionalDouble(path, e, "alpha_initial");
       l.cyclic_value = OptionalDouble(path, e, "cyclic_value");
-      if (const char* a = e->Attribute("alpha_scales")) {
-        const std::string v = a;
-        if (v != "all" && v != "feedforward") {
-          Fail(path, line, "<learning> alpha_scales=\"" + v + "\" (expected all or feedforward)");
-        }
-        l.alpha_scales_feedback = v == "all";
+      if (auto v = OptionalChoice(path, e, "alpha_scales", "all", "feedforward")) {
+        l.alpha_scales_feedback = *v == "all";
       }
-      if (const char* a = e->Attribute("terminal")) {
-        const std::string v = a;
-        if (v != "time" && v != "event") {
-          Fail(path, line, "<learning> terminal=\"" + v + "\" (expected time or event)");
-        }
-        l.terminal_event = v == "event";
+      if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
+        l.terminal_event = *v == "event";
       }
-      if (const char* a = e->Attribute("regularization_scaling")) {
-        const std::string v = a;
-        if (v != "scalar" && v != "per_input") {
-          Fail(path, line, "<learning> regularization_scaling=\"" + v +
-                               "\" (expected scalar or per_input)");
-        }
-        l.per_input_regularization = v == "per_input";
+      if (auto v = OptionalChoice(path, e, "regularization_scaling", "scalar", "per_input")) {
+        l.per_input_regularization = *v == "per_input";
       }
-      if (const char* a = e->Attribute("alpha_after_accept")) {
-        const std::string v = a;
-        if (v != "reset" && v != "grow") {
-          Fail(path, line, "<learning> alpha_after_accept=\"" + v + "\" (expected reset or grow)");
-        }
-        l.reset_alpha_on_accept = v == "reset";
+      if (auto v = OptionalChoice(path, e, "alpha_after_accept", "reset", "grow")) {
+        l.reset_alpha_on_accept = *v == "reset";
       }
-      if (auto di = OptionalDouble(path, e, "delta_i")) {
-        if (*di != std::floor(*di) || *di < 1) Fail(path, line, "<learning> delta_i must be an integer >= 1");
-        l.delta_i = static_cast<int>(*di);
-      }
-      if (auto ih = OptionalDouble(path, e, "initial_hops")) {
-        if (*ih != std::floor(*ih) || *ih < 1) {
-          Fail(path, line, "<learning> initial_hops must be an integer >= 1");
-        }
-        l.initial_hops = static_cast<int>(*ih);
-      }
+      l.delta_i = OptionalCount(path, e, "delta_i");
+      l.initial_hops = OptionalCount(path, e, "initial_hops");
     } else if (tag == "gait") {
       s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
     } else {
