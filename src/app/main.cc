@@ -237,6 +237,7 @@ int Run(int argc, char** argv) {
     config.learner.backward.terminal_event = *l.terminal_event;
     config.model_learner.backward.terminal_event = *l.terminal_event;
   }
+  if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();
   std::unique_ptr<plugin::HopperController> controller =

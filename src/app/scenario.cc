@@ -166,6 +166,9 @@ Scenario LoadScenario(const std::string& path) {
       if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
         l.terminal_event = *v == "event";
       }
+      if (auto v = OptionalChoice(path, e, "reference", "own", "gait")) {
+        l.anchor_reference = *v == "gait";
+      }
       if (auto v = OptionalChoice(path, e, "regularization_scaling", "scalar", "per_input")) {
         l.per_input_regularization = *v == "per_input";
       }

@@ -62,6 +62,9 @@ struct LearningOverrides {
   std::optional<double> alpha_initial;      // alpha_0 of the line search, in (0, 1]
   std::optional<double> cyclic_value;       // BackwardPassSettings::cyclic_value, in [0, 1]
   std::optional<bool> terminal_event;       // terminal="time" (paper) | "event" (terminal_event)
+  // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
+  // model gait's takeoff state: ControllerConfig::anchor_reference)
+  std::optional<bool> anchor_reference;
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory

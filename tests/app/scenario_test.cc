@@ -114,8 +114,10 @@ TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
 TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
   char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, "terminal='event' initial_hops='2'");
+  std::snprintf(buf, sizeof(buf), fmt, "terminal='event' initial_hops='2' reference='gait'");
   Scenario s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.anchor_reference.has_value());
+  EXPECT_TRUE(*s.learning.anchor_reference);
   ASSERT_TRUE(s.learning.terminal_event.has_value());
   EXPECT_TRUE(*s.learning.terminal_event);
   ASSERT_TRUE(s.learning.initial_hops.has_value());
@@ -125,6 +127,13 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   ASSERT_TRUE(s.learning.terminal_event.has_value());
   EXPECT_FALSE(*s.learning.terminal_event);
   EXPECT_FALSE(s.learning.initial_hops.has_value());
+  EXPECT_FALSE(s.learning.anchor_reference.has_value());
+  std::snprintf(buf, sizeof(buf), fmt, "reference='own'");
+  s = LoadScenario(Write(buf));
+  ASSERT_TRUE(s.learning.anchor_reference.has_value());
+  EXPECT_FALSE(*s.learning.anchor_reference);
+  std::snprintf(buf, sizeof(buf), fmt, "reference='nominal'");
+  ExpectError(buf, {"<learning>", "reference=\"nominal\"", "own or gait"});
   std::snprintf(buf, sizeof(buf), fmt, "terminal='takeoff'");
   ExpectError(buf, {"<learning>", "terminal=\"takeoff\"", "time or event"});
   std::snprintf(buf, sizeof(buf), fmt, "initial_hops='0'");

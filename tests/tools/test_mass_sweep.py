@@ -62,6 +62,29 @@ class MassSweepTest(TempDirTest):
                         table)
         self.assertIn("| survived 2/2 | survived 2/2 |", table)
 
+    def test_reference(self):
+        out = os.path.join(self.tmp, "sweep")
+        r = run_tool("mass_sweep", "--masses", "10", "--methods", "alg1", "--cyclic", "0",
+                     "--reference", "own,gait", "--hops", "4", "--hopper", HOPPER, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(out, "results.csv")) as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual([(r["reference"], r["exit"], r["hops"]) for r in rows],
+                         [("own", "0", "4"), ("gait", "0", "4")])
+        with open(os.path.join(out, "scenarios", "m10_v0.5_alg1_c0_time_gait.xml")) as f:
+            self.assertIn('reference="gait"', f.read())
+        with open(os.path.join(out, "scenarios", "m10_v0.5_alg1_c0_time.xml")) as f:
+            self.assertIn('reference="own"', f.read())
+        # The reference changes the learner's cost, so the two runs log different hops.
+        logs = []
+        for case in ("m10_v0.5_alg1_c0_time", "m10_v0.5_alg1_c0_time_gait"):
+            with open(os.path.join(out, "runs", case, "hops.csv")) as f:
+                logs.append(f.read())
+        self.assertNotEqual(logs[0], logs[1])
+        with open(os.path.join(out, "results.md")) as f:
+            table = f.read()
+        self.assertIn("| alg1 c=0 ref=own | alg1 c=0 ref=gait |", table)
+
 
 class MassSweepUsageTest(TempDirTest):
     def test_bad_usage(self):
@@ -75,6 +98,10 @@ class MassSweepUsageTest(TempDirTest):
         self.assertEqual(r.returncode, 2)
         self.assertIn("--terminal", r.stderr)
         self.assertIn("evnt", r.stderr)
+        r = run_tool("mass_sweep", "--reference", "nominal", "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--reference", r.stderr)
+        self.assertIn("nominal", r.stderr)
         r = run_tool("mass_sweep", "--speed", "fast", "--out", self.tmp)  # --speed: old alias
         self.assertEqual(r.returncode, 2)
         self.assertIn("fast", r.stderr)
