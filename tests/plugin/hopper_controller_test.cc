@@ -301,5 +301,40 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   EXPECT_LT(rig.c().learner()->nominal_cost(), initial);
 }
 
+TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
+  // (36) can never hold (c huge) and alpha_min lies just below alpha_0, so the first rejected
+  // trial terminates the line search with no accepted iteration. From then on the robot must run
+  // u^0, the OC-FB law, not a replay of the measured nominal's inputs.
+  ControllerConfig config;
+  config.learner.c = 1e12;
+  config.learner.alpha_min = 0.6 * config.learner.alpha_initial;  // gamma 0.5: one rejection
+  config.initial_hops = 2;
+  Rig rig("hopper_m12.xml", config);
+  ASSERT_TRUE(rig.ok());
+  std::vector<HopReport> reports;
+  std::vector<bool> initial_law;  // runs_initial_law() during each hop
+  bool during = rig.c().runs_initial_law();
+  while (rig.c().hop() < 5 && rig.d()->time < 6.0) {
+    const int hop = rig.c().hop();
+    rig.Step();
+    if (rig.c().hop() != hop) initial_law.push_back(during);
+    during = rig.c().runs_initial_law();
+    for (const HopReport& r : rig.c().TakeReports()) reports.push_back(r);
+    ExpectInputInBounds(rig.c());
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  ASSERT_EQ(reports.size(), 5u);
+  ASSERT_EQ(initial_law.size(), 5u);
+  // hops 0, 1: warm-up with u^0; hop 2: the first trial (rejected, terminates); hops 3, 4: u^0.
+  EXPECT_TRUE(initial_law[0]);
+  EXPECT_TRUE(initial_law[1]);
+  EXPECT_FALSE(initial_law[2]);
+  EXPECT_FALSE(reports[2].accepted);
+  EXPECT_EQ(reports[2].status, LearnerStatus::kLineSearchFailed);
+  EXPECT_TRUE(initial_law[3]);
+  EXPECT_TRUE(initial_law[4]);
+  EXPECT_EQ(rig.c().learner()->iteration(), 0);
+}
+
 }  // namespace
 }  // namespace ddoc::plugin
