@@ -123,7 +123,8 @@ struct SolveResult {
 /// robot is in (the feedback in (34) absorbs the initial deviation). When alpha < alpha_min the
 /// learner is terminated (kLineSearchFailed): NextTrial() then returns the control law that
 /// produced the last accepted trial ("the control law of the previous iteration"), or for
-/// i = 0 a replay of the nominal inputs (alpha = 0).
+/// i = 0 a replay of the nominal inputs (alpha = 0). A caller that still holds the policy that
+/// produced x^0 can run that instead (the hopper plugin runs u^0: runs_initial_law()).
 class Learner {
  public:
   /// Validates problem and settings; allocates everything. The problem must outlive this.
