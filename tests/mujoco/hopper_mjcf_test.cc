@@ -63,6 +63,15 @@ void ExpectError(const std::string& path, std::initializer_list<std::string> nee
   }
 }
 
+// A fresh copy of models/ with one edit (`from` -> `to` in `edited`); loading `loaded` from it
+// must throw HopperSimError naming every string of `needles`.
+void ExpectErrorAfterEdit(const std::string& edited, const std::string& from, const std::string& to,
+                          const std::string& loaded, std::initializer_list<std::string> needles) {
+  ModelCopy copy;
+  copy.Edit(edited, from, to);
+  ExpectError(copy.Path(loaded), needles);
+}
+
 TEST(HopperMjcfTest, MalformedXmlNamesFileAndLine) {
   ModelCopy copy;
   copy.Edit("hopper_limbs.xml", "<body name=\"foot\" pos=\"0 0 -0.7\">", "<body name=\"foot\" pos=");
@@ -71,65 +80,33 @@ TEST(HopperMjcfTest, MalformedXmlNamesFileAndLine) {
 }
 
 TEST(HopperMjcfTest, MissingNamesAreReported) {
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_limbs.xml", "<body name=\"leg\"", "<body name=\"shank\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no body named 'leg'"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_limbs.xml", "<joint name=\"hip\"", "<joint name=\"hip2\"");
-    // The actuator refers to joint 'hip' too: MuJoCo's compiler names it.
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "hip"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_limbs.xml", "<joint name=\"pitch\"", "<joint name=\"yaw\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no joint named 'pitch'"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_limbs.xml", "<geom name=\"foot\"", "<geom name=\"toe\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no geom named 'foot'"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_common.xml", "name=\"floor\"", "name=\"ground\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no geom named 'floor'"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_common.xml", "name=\"leg_motor\"", "name=\"knee_motor\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "no actuator named 'leg_motor'"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_common.xml", "joint=\"hip\" gear=\"-1\"", "joint=\"hip\" gear=\"1\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "hip_motor", "gear -1"});
-  }
+  ExpectErrorAfterEdit("hopper_limbs.xml", "<body name=\"leg\"", "<body name=\"shank\"",
+                       "hopper.xml", {"hopper.xml", "no body named 'leg'"});
+  // The actuator refers to joint 'hip' too: MuJoCo's compiler names it.
+  ExpectErrorAfterEdit("hopper_limbs.xml", "<joint name=\"hip\"", "<joint name=\"hip2\"",
+                       "hopper.xml", {"hopper.xml", "hip"});
+  ExpectErrorAfterEdit("hopper_limbs.xml", "<joint name=\"pitch\"", "<joint name=\"yaw\"",
+                       "hopper.xml", {"hopper.xml", "no joint named 'pitch'"});
+  ExpectErrorAfterEdit("hopper_limbs.xml", "<geom name=\"foot\"", "<geom name=\"toe\"",
+                       "hopper.xml", {"hopper.xml", "no geom named 'foot'"});
+  ExpectErrorAfterEdit("hopper_common.xml", "name=\"floor\"", "name=\"ground\"",
+                       "hopper.xml", {"hopper.xml", "no geom named 'floor'"});
+  ExpectErrorAfterEdit("hopper_common.xml", "name=\"leg_motor\"", "name=\"knee_motor\"",
+                       "hopper.xml", {"hopper.xml", "no actuator named 'leg_motor'"});
+  ExpectErrorAfterEdit("hopper_common.xml", "joint=\"hip\" gear=\"-1\"", "joint=\"hip\" gear=\"1\"",
+                       "hopper.xml", {"hopper.xml", "hip_motor", "gear -1"});
 }
 
 TEST(HopperMjcfTest, NonPositiveMassOrInertiaNamesFileLineAndBody) {
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_m8.xml", "mass=\"8\"", "mass=\"0\"");
-    ExpectError(copy.Path("hopper_m8.xml"), {"hopper_m8.xml", "line", "body 'torso'", "mass = 0"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_m12.xml", "mass=\"12\"", "mass=\"-12\"");
-    ExpectError(copy.Path("hopper_m12.xml"), {"hopper_m12.xml", "body 'torso'", "mass = -12"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper_limbs.xml", "diaginertia=\"0.25 0.25 0.25\"", "diaginertia=\"0.25 0 0.25\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper_limbs.xml", "line", "body 'leg'", "diaginertia"});
-  }
-  {
-    ModelCopy copy;
-    copy.Edit("hopper.xml", "diaginertia=\"2.5 2.5 2.5\"", "diaginertia=\"-2.5 2.5 2.5\"");
-    ExpectError(copy.Path("hopper.xml"), {"hopper.xml", "body 'torso'", "diaginertia"});
-  }
+  ExpectErrorAfterEdit("hopper_m8.xml", "mass=\"8\"", "mass=\"0\"",
+                       "hopper_m8.xml", {"hopper_m8.xml", "line", "body 'torso'", "mass = 0"});
+  ExpectErrorAfterEdit("hopper_m12.xml", "mass=\"12\"", "mass=\"-12\"",
+                       "hopper_m12.xml", {"hopper_m12.xml", "body 'torso'", "mass = -12"});
+  ExpectErrorAfterEdit("hopper_limbs.xml", "diaginertia=\"0.25 0.25 0.25\"",
+                       "diaginertia=\"0.25 0 0.25\"",
+                       "hopper.xml", {"hopper_limbs.xml", "line", "body 'leg'", "diaginertia"});
+  ExpectErrorAfterEdit("hopper.xml", "diaginertia=\"2.5 2.5 2.5\"", "diaginertia=\"-2.5 2.5 2.5\"",
+                       "hopper.xml", {"hopper.xml", "body 'torso'", "diaginertia"});
 }
 
 }  // namespace
