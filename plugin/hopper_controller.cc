@@ -159,9 +159,16 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
     learner_ = std::make_unique<Learner>(problem_, config_.learner);
   }
   policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-  initial_law_ = true;
+  initial_policy_ = policy_;  // the model learner no longer changes: every call gives this slot
   policy_->BeginTrial();
 }
+
+bool HopperController::LearnerStoppedBeforeAccepting() const {
+  return learner_ && learner_->status() == LearnerStatus::kLineSearchFailed &&
+         learner_->iteration() == 0;
+}
+
+bool HopperController::runs_initial_law() const { return policy_ == initial_policy_; }
 
 std::vector<HopReport> HopperController::TakeReports() {
   std::vector<HopReport> out;
@@ -408,7 +415,6 @@ void HopperController::EndHop() {
     r.learner_cost = learner_->nominal_cost();
     r.status = learner_->status();
     policy_ = &learner_->NextTrial();
-    initial_law_ = false;
   } else {
     cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
     const TrialResult tr = learner_->CompleteTrial(
@@ -419,9 +425,9 @@ void HopperController::EndHop() {
     policy_ = &learner_->NextTrial();
     // Terminated before any trial passed (36): the law of iteration 0 is u^0, the OC-FB law
     // that produced the nominal, not a replay of the nominal's inputs (Learner::NextTrial).
-    initial_law_ =
-        learner_->status() == LearnerStatus::kLineSearchFailed && learner_->iteration() == 0;
-    if (initial_law_) policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
+    if (LearnerStoppedBeforeAccepting()) {
+      policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
+    }
   }
   policy_->BeginTrial();
   reports_.push_back(r);

@@ -233,7 +233,7 @@ class HopperController {
   /// law of the previous accepted iteration" for i = 0. Measured on MuJoCo (11 kg robot, 0.55
   /// m/s, terminal="event" cyclic_value="0.99" reference="gait"): the replay hopped 100 hops at
   /// a mean cost of 99.9 over the last 20, u^0 at 1.47.
-  bool runs_initial_law() const { return initial_law_; }
+  bool runs_initial_law() const;
   double model_cost() const { return model_cost_; }        ///< converged OC-FB cost on the model
   int model_iterations() const { return model_iterations_; }
   /// Set when the controller caught an internal error; the message says what failed. The
@@ -254,6 +254,8 @@ class HopperController {
   void NewStep(const mjModel* m, mjData* d);
   void BeginHop(double t, const mjData* d);
   void EndHop();                         // takeoff: offline part for the next hop
+  // The learner terminated (alpha < alpha_min) before any trial passed (36).
+  bool LearnerStoppedBeforeAccepting() const;
   void WriteHeld(const mjModel* m, mjData* d);
   void Sanitize();                       // u_ finite and inside the bounds
   void LoadPhaseTable();                 // from the running law's nominal (no allocation)
@@ -271,7 +273,7 @@ class HopperController {
   std::unique_ptr<Learner> model_learner_;  // OC-FB on the model
   std::unique_ptr<Learner> learner_;        // Algorithm 1 / mRL on the robot
   OnlineController* policy_ = nullptr;      // the law of the running hop
-  bool initial_law_ = true;                 // policy_ is u^0 (model_learner_'s OC-FB law)
+  const OnlineController* initial_policy_ = nullptr;  // u^0: model_learner_->ConvergedPolicy
   double model_cost_ = 0.0;
   int model_iterations_ = 0;
 
