@@ -304,12 +304,7 @@ def pushes(run):
             out.append((float(t0), float(t1), _push_force(run, t0, t1)))
         if out:
             return out
-    for p in run.summary.get("pushes") or []:
-        try:
-            t0 = float(p["t"])
-            out.append((t0, t0 + float(p.get("duration", 0.0)), float(p.get("force", math.nan))))
-        except (KeyError, TypeError, ValueError):
-            warn(f"{run.path}/summary.json: push entry {p!r} lacks t/duration/force, ignored")
+    out = _scheduled_pushes(run)
     if out:
         return out
     tr = run.trajectory
@@ -373,6 +368,109 @@ def converged_hop(hops, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I):
         else:
             streak = 0
     return None
+
+
+# Defaults of push_recovery().
+RECOVERY_TOLERANCE = 0.1  # a hop is back on the cycle when its cost <= (1 + this) x the baseline
+RECOVERY_BASELINE_HOPS = 5  # the baseline is the median cost of this many hops before the push
+RECOVERY_MIN_HOPS = 3     # ... and it must stay there for at least this many logged hops
+
+
+class PushRecovery:
+    """How one run answered one push (see push_recovery)."""
+
+    def __init__(self, t, force, hop, baseline, status, hops_to_recover):
+        self.t = t                  # push start [s]
+        self.force = force          # N (nan when unknown)
+        self.hop = hop              # hop in which the push started
+        self.baseline = baseline    # median cost of the hops before the push (nan: none logged)
+        self.status = status        # "recovered" | "not recovered" | "fell" | "not reached"
+        self.hops_to_recover = hops_to_recover  # r - hop when recovered, else None
+
+    def cell(self):
+        if self.status == "recovered":
+            return str(self.hops_to_recover)
+        return {"fell": "fell", "not recovered": "no", "not reached": "-"}[self.status]
+
+
+def push_recovery(run, tolerance=RECOVERY_TOLERANCE, baseline_hops=RECOVERY_BASELINE_HOPS,
+                  min_hops=RECOVERY_MIN_HOPS):
+    """For every push of the run, whether and within how many hops it returned to periodic hopping.
+
+    p is the hop in which the push started and e the last hop before the next push's hop (or the
+    last logged hop). The baseline b is the median cost (42) of up to `baseline_hops` hops before p.
+    The run recovered in r - p hops when r is the first hop after p from which every hop up to e
+    costs at most (1 + tolerance) b, and at least `min_hops` such hops were logged. Otherwise the
+    status is "fell" (the run fell in [p, e]), "not recovered", or "not reached" (the run ended
+    before the push). Returns a list of PushRecovery in the order of the pushes.
+    """
+    if tolerance < 0 or baseline_hops < 1 or min_hops < 1:
+        raise ValueError("push_recovery: tolerance >= 0, baseline_hops >= 1, min_hops >= 1")
+    hop_ids = [int(h) for h in run.hops["hop"]]
+    costs = [float(c) for c in run.hops["cost"]]
+    last_hop = run.fall_hop if run.fell else (hop_ids[-1] if hop_ids else -1)
+    ps = pushes(run)
+    scheduled = _scheduled_pushes(run)
+    if len(scheduled) > len(ps):  # pushes after a fall are in summary.json only
+        ps = scheduled
+    starts = [_push_hop(run, t0) for t0, _, _ in ps]
+    out = []
+    for k, (t0, _, force) in enumerate(ps):
+        p = starts[k]
+        if p is None:
+            out.append(PushRecovery(t0, force, None, math.nan, "not reached", None))
+            continue
+        before = [c for h, c in zip(hop_ids, costs) if p - baseline_hops <= h < p]
+        b = float(np.median(before)) if before else math.nan
+        later = [s for s in starts[k + 1:] if s is not None and s > p]
+        e = min(later) - 1 if later else last_hop
+        if run.fell and run.fall_hop <= e:
+            out.append(PushRecovery(t0, force, p, b, "fell", None))
+            continue
+        window = [(h, c) for h, c in zip(hop_ids, costs) if p < h <= e]
+        r = None
+        for h, c in reversed(window):  # the longest good tail of the window
+            if not (math.isfinite(b) and c <= (1.0 + tolerance) * b):
+                break
+            r = h
+        if r is not None and sum(1 for h, _ in window if h >= r) >= min_hops:
+            out.append(PushRecovery(t0, force, p, b, "recovered", r - p))
+        else:
+            out.append(PushRecovery(t0, force, p, b, "not recovered", None))
+    return out
+
+
+def _scheduled_pushes(run):
+    """The pushes the scenario scheduled [(t_start, t_end, force)], from summary.json."""
+    out = []
+    for p in run.summary.get("pushes") or []:
+        try:
+            t0 = float(p["t"])
+            out.append((t0, t0 + float(p.get("duration", 0.0)), float(p.get("force", math.nan))))
+        except (KeyError, TypeError, ValueError):
+            warn(f"{run.path}/summary.json: push entry {p!r} lacks t/duration/force, ignored")
+    return out
+
+
+def _push_hop(run, t):
+    """The logged hop [t_start, t_end) that contains time t; the hop after the last logged one when
+    t is in it (a fall or an unfinished hop); None when the run ended before t."""
+    h = run.hops
+    for k in range(len(h)):
+        if h["t_start"][k] <= t < h["t_end"][k]:
+            return int(h["hop"][k])
+    if len(h) and t >= h["t_end"][-1] and run.fell and t <= _fall_time(run):
+        return int(h["hop"][-1]) + 1
+    return None
+
+
+def _fall_time(run):
+    """Time of the fall event; inf when events.csv does not say (the push is then counted)."""
+    if run.events is not None:
+        for t, ty in zip(run.events["t"], run.events["type"]):
+            if ty == "fall" and math.isfinite(t):
+                return float(t)
+    return math.inf
 
 
 # ---------------------------------------------------------------------------------------------------
