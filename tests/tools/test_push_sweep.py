@@ -102,34 +102,41 @@ def push_scenario(tmp, with_push=True):
 
 @unittest.skipUnless(os.access(HOPPER, os.X_OK), "DDOC_HOPPER (the ddoc-hopper binary) not set")
 class PushSweepTest(TempDirTest):
-    def test_speeds_and_durations(self):
+    def test_speeds_durations_and_offsets(self):
         out = os.path.join(self.tmp, "sweep")
         r = run_tool("push_sweep", "--scenario", push_scenario(self.tmp), "--speeds", "0.4,0.5",
-                     "--durations", "0.02", "--methods", "ocfb", "--hopper", HOPPER, "--out", out)
+                     "--durations", "0.02", "--offsets", "0,0.3", "--methods", "ocfb",
+                     "--hopper", HOPPER, "--out", out)
         self.assertEqual(r.returncode, 0, r.stderr)
         with open(os.path.join(out, "results.csv")) as f:
             rows = list(csv.DictReader(f))
-        self.assertEqual([(r["speed"], r["duration"], r["method"], r["exit"], r["hops"])
-                          for r in rows],
-                         [("0.4", "0.02", "ocfb", "0", "4"), ("0.5", "0.02", "ocfb", "0", "4")])
+        self.assertEqual([(r["speed"], r["duration"], r["offset"], r["method"], r["exit"],
+                           r["hops"]) for r in rows],
+                         [("0.4", "0.02", "0.0", "ocfb", "0", "4"),
+                          ("0.4", "0.02", "0.3", "ocfb", "0", "4"),
+                          ("0.5", "0.02", "0.0", "ocfb", "0", "4"),
+                          ("0.5", "0.02", "0.3", "ocfb", "0", "4")])
         for row in rows:
             self.assertEqual(row["push1_force"], "10")
             self.assertIn(row["push1_status"], ("recovered", "not recovered"))
-        with open(os.path.join(out, "scenarios", "v0.4_d0.02_ocfb.xml")) as f:
+        with open(os.path.join(out, "scenarios", "v0.4_d0.02_o0_ocfb.xml")) as f:
             scenario = f.read()
         self.assertIn('speed="0.4"', scenario)
         self.assertIn('duration="0.02"', scenario)
         self.assertIn('cyclic_value="0.99"', scenario)  # the scenario's settings are kept
-        with open(os.path.join(out, "runs", "v0.5_d0.02_ocfb", "events.csv")) as f:
+        with open(os.path.join(out, "runs", "v0.5_d0.02_o0_ocfb", "events.csv")) as f:
             events = f.read()
         self.assertIn("push_start", events)  # the push really happened
-        with open(os.path.join(out, "runs", "v0.5_d0.02_ocfb", "summary.json")) as f:
-            pushes = json.load(f)["pushes"]
-        self.assertEqual([(p["force"], p["duration"]) for p in pushes], [(10.0, 0.02)])
+        for offset in (0, 0.3):
+            with open(os.path.join(out, "runs", f"v0.5_d0.02_o{offset:g}_ocfb",
+                                   "summary.json")) as f:
+                pushes = json.load(f)["pushes"]
+            self.assertEqual([(p["t"], p["force"], p["duration"]) for p in pushes],
+                             [(1.0 + offset, 10.0, 0.02)])
         with open(os.path.join(out, "results.md")) as f:
             table = f.read()
-        self.assertIn("| speed [m/s] | push duration [s] | ocfb |", table)
-        self.assertRegex(table, r"\| 0\.5 \| 0\.02 \| 4: (\d+|no) \|")
+        self.assertIn("| speed [m/s] | push duration [s] | time offset [s] | ocfb |", table)
+        self.assertRegex(table, r"\| 0\.5 \| 0\.02 \| 0\.3 \| 4: (\d+|no) \|")
 
 
 class PushSweepUsageTest(TempDirTest):
@@ -142,6 +149,9 @@ class PushSweepUsageTest(TempDirTest):
         r = run_tool("push_sweep", "--durations", "0.1,-1", "--out", self.tmp)
         self.assertEqual(r.returncode, 2)
         self.assertIn("--durations", r.stderr)
+        r = run_tool("push_sweep", "--offsets", "later", "--out", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--offsets", r.stderr)
         r = run_tool("push_sweep", "--methods", "alg2", "--out", self.tmp)
         self.assertEqual(r.returncode, 2)
         self.assertIn("alg2", r.stderr)
