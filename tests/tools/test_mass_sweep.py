@@ -88,26 +88,14 @@ class MassSweepTest(TempDirTest):
 
 class MassSweepUsageTest(TempDirTest):
     def test_bad_usage(self):
-        r = run_tool("mass_sweep", "--methods", "foo", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("foo", r.stderr)
-        r = run_tool("mass_sweep", "--cyclic", "2", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("--cyclic", r.stderr)
-        r = run_tool("mass_sweep", "--terminal", "time,evnt", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("--terminal", r.stderr)
-        self.assertIn("evnt", r.stderr)
-        r = run_tool("mass_sweep", "--reference", "nominal", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("--reference", r.stderr)
-        self.assertIn("nominal", r.stderr)
-        r = run_tool("mass_sweep", "--speed", "fast", "--out", self.tmp)  # --speed: old alias
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("fast", r.stderr)
-        r = run_tool("mass_sweep", "--hopper", os.path.join(self.tmp, "nope"), "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("ddoc-hopper not found", r.stderr)
+        self.assert_usage_errors("mass_sweep", [
+            (["--methods", "foo"], ["foo"]),
+            (["--cyclic", "2"], ["--cyclic"]),
+            (["--terminal", "time,evnt"], ["--terminal", "evnt"]),
+            (["--reference", "nominal"], ["--reference", "nominal"]),
+            (["--speed", "fast"], ["fast"]),  # --speed: old alias
+            (["--hopper", os.path.join(self.tmp, "nope")], ["ddoc-hopper not found"]),
+        ])
 
 
 if __name__ == "__main__":

@@ -141,27 +141,15 @@ class PushSweepTest(TempDirTest):
 
 class PushSweepUsageTest(TempDirTest):
     def test_bad_usage(self):
-        hopper = HOPPER or "/bin/true"
-        r = run_tool("push_sweep", "--scenario", push_scenario(self.tmp, with_push=False),
-                     "--hopper", hopper, "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("has no <push>", r.stderr)
-        r = run_tool("push_sweep", "--durations", "0.1,-1", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("--durations", r.stderr)
-        r = run_tool("push_sweep", "--offsets", "later", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("--offsets", r.stderr)
-        r = run_tool("push_sweep", "--methods", "alg2", "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("alg2", r.stderr)
-        r = run_tool("push_sweep", "--scenario", os.path.join(self.tmp, "missing.xml"),
-                     "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("missing.xml", r.stderr)
-        r = run_tool("push_sweep", "--hopper", os.path.join(self.tmp, "nope"), "--out", self.tmp)
-        self.assertEqual(r.returncode, 2)
-        self.assertIn("ddoc-hopper not found", r.stderr)
+        no_push = push_scenario(self.tmp, with_push=False)
+        self.assert_usage_errors("push_sweep", [
+            (["--scenario", no_push, "--hopper", HOPPER or "/bin/true"], ["has no <push>"]),
+            (["--durations", "0.1,-1"], ["--durations"]),
+            (["--offsets", "later"], ["--offsets"]),
+            (["--methods", "alg2"], ["alg2"]),
+            (["--scenario", os.path.join(self.tmp, "missing.xml")], ["missing.xml"]),
+            (["--hopper", os.path.join(self.tmp, "nope")], ["ddoc-hopper not found"]),
+        ])
 
 
 if __name__ == "__main__":

@@ -41,3 +41,13 @@ class TempDirTest(unittest.TestCase):
         dst = os.path.join(self.tmp, new_name or name)
         shutil.copytree(run_dir(name), dst)
         return dst
+
+    def assert_usage_errors(self, tool, cases):
+        """Each case (args, needles): `tool args --out TMP` exits 2 and its stderr holds every
+        needle (the message names what is wrong)."""
+        for args, needles in cases:
+            with self.subTest(args=args):
+                r = run_tool(tool, *args, "--out", self.tmp)
+                self.assertEqual(r.returncode, 2, r.stderr)
+                for needle in needles:
+                    self.assertIn(needle, r.stderr)
