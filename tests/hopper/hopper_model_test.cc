@@ -8,11 +8,13 @@
 
 #include "ddoc/hopper/hop_simulator.h"
 #include "fd.h"
+#include "flight_energy.h"
 
 namespace ddoc {
 namespace {
 
 using testing::FdJacobian;
+using testing::FlightEnergy;
 using testing::RelErr;
 using V14 = Eigen::Matrix<double, 14, 1>;
 using V10 = Eigen::Matrix<double, 10, 1>;
@@ -123,16 +125,6 @@ TEST(HopperModelTest, ResetAndSurfaceDerivativesMatchFiniteDifferences) {
       EXPECT_LT(RelErr(h0, FdJacobian(s0, xf)), 1e-7);
     }
   }
-}
-
-// Mechanical energy of the flight state with constant stiffnesses (kd = 0) and input u: the
-// Lagrangian of DESIGN.md plus the VSA spring potentials
-//   V = -tau0 (phi - theta) + 1/2 k_hip (phi - theta)^2 - F0 r + 1/2 k_leg (r - r0)^2.
-double FlightEnergy(const HopperParams& p, const V14& x, const Eigen::Vector4d& u) {
-  const double q = x(3) - x(2);
-  return 0.5 * p.M * (x(7) * x(7) + x(8) * x(8)) + 0.5 * p.J_leg * x(9) * x(9) +
-         0.5 * p.J_body * x(10) * x(10) + p.M * p.g * x(1) - u(0) * q + 0.5 * x(5) * q * q -
-         u(1) * x(4) + 0.5 * x(6) * (x(4) - p.r0) * (x(4) - p.r0);
 }
 
 TEST(HopperModelTest, StanceAndFlightConserveEnergyWithConstantStiffness) {

@@ -9,22 +9,16 @@
 #include "ddoc/hopper/hop_simulator.h"
 #include "ddoc/hopper/nominal_gait.h"
 #include "ddoc/mujoco/hopper_sim.h"
+#include "flight_energy.h"
 #include "model_files.h"
 
 namespace ddoc {
 namespace {
 
+using testing::FlightEnergy;
 using testing::ModelPath;
 using V14 = Eigen::Matrix<double, 14, 1>;
 using V10 = Eigen::Matrix<double, 10, 1>;
-
-// Mechanical energy with constant stiffnesses (see hopper_model_test.cc).
-double Energy(const HopperParams& p, const V14& x, const Eigen::Vector4d& u) {
-  const double q = x(3) - x(2);
-  return 0.5 * p.M * (x(7) * x(7) + x(8) * x(8)) + 0.5 * p.J_leg * x(9) * x(9) +
-         0.5 * p.J_body * x(10) * x(10) + p.M * p.g * x(1) - u(0) * q + 0.5 * x(5) * q * q -
-         u(1) * x(4) + 0.5 * x(6) * (x(4) - p.r0) * (x(4) - p.r0);
-}
 
 TEST(HopperAgreementTest, SignConventionsMatchTheMjcf) {
   HopperSim sim(ModelPath("hopper.xml"));
@@ -172,7 +166,7 @@ JumpCase MeasureJump(double theta) {
   const double te = sim.events()[0].time;
   const V14 mb = traj[std::lround((te - delta) / h)], ma = traj[std::lround((te + delta) / h)];
   c.jump_mj = ma(9) - mb(9);
-  c.de_mj = Energy(p, mb, u) - Energy(p, ma, u);
+  c.de_mj = FlightEnergy(p, mb, u) - FlightEnergy(p, ma, u);
   for (int variant = 0; variant < 2; ++variant) {
     const HopperModel& md = variant == 0 ? model : paper;
     HopSimSettings hs;
