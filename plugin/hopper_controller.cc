@@ -33,6 +33,11 @@ bool FootTouches(const HopperMapping& map, const mjData* d, double distance) {
   return false;
 }
 
+// (x, y, xd, yd) of a flight-coordinate state.
+Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
+  return Eigen::Vector4d(xf(hopper::kX), xf(hopper::kY), xf(hopper::kXd), xf(hopper::kYd));
+}
+
 HopperController* g_attached = nullptr;
 
 void ControlCallback(const mjModel* m, mjData* d) {
@@ -305,6 +310,7 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
     recorder_.EndMode();
     recorder_.BeginMode(hopper::kStance);
     x_td_ = xf_;
+    body_td_ = BodyState(xf_);
     t_touchdown_ = t;
     foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
     foot_td_h_ = HopperModel::FootHeight(xf_);
@@ -317,6 +323,7 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
              d->qfrc_constraint[map_.dof_z] < config_.takeoff_force) {
     EndHop();
     BeginHop(t, d);
+    reports_.back().body_takeoff = BodyState(xf_);
     last_event_ = t;
   }
 
@@ -389,6 +396,7 @@ void HopperController::EndHop() {
   r.du2 = policy_->du_squared_integral();
   r.dt2 = policy_->dT().squaredNorm();
   r.nonfinite = hop_nonfinite_;
+  r.body_touchdown = body_td_;
 
   // The offline part for the next hop.
   if (config_.method == Method::kOcfb) {

@@ -170,6 +170,11 @@ struct HopReport {
   double dt2 = 0.0;            ///< |dT|^2 (planned vs nominal)
   LearnerStatus status = LearnerStatus::kRunning;
   int nonfinite = 0;           ///< steps with a non-finite measured state in this hop
+  /// COM (x, y, xd, yd) in the world frame at touchdown (the last pre-impact state) and at the
+  /// takeoff that ends the hop (the first flight state), from the same mjData reads as the
+  /// controller's state.
+  Eigen::Vector4d body_touchdown = Eigen::Vector4d::Zero();
+  Eigen::Vector4d body_takeoff = Eigen::Vector4d::Zero();
 };
 
 /// mRL's direction plant: the analytic model run from the measured initial state, with the
@@ -281,6 +286,7 @@ class HopperController {
   Eigen::Vector4d u_ = Eigen::Vector4d::Zero();  // input held over the current step
   Eigen::Matrix<double, 14, 1> xf_;              // flight-state buffer
   Eigen::Matrix<double, 10, 1> xs_;              // stance-state buffer
+  Eigen::Vector4d body_td_ = Eigen::Vector4d::Zero();  // COM (x, y, xd, yd) at touchdown
 
   // Phase and hop bookkeeping.
   int mode_ = hopper::kFlight;

@@ -361,8 +361,10 @@ int Run(int argc, char** argv) {
     }
 
     for (const plugin::HopReport& h : controller->TakeReports()) {
-      log->WriteEvent({h.t_touchdown, h.hop, "touchdown", 0, 0, 0, 0});
-      log->WriteEvent({h.t_end, h.hop, "takeoff", 0, 0, 0, 0});
+      const Eigen::Vector4d& td = h.body_touchdown;
+      const Eigen::Vector4d& to = h.body_takeoff;
+      log->WriteEvent({h.t_touchdown, h.hop, "touchdown", td(0), td(1), td(2), td(3)});
+      log->WriteEvent({h.t_end, h.hop, "takeoff", to(0), to(1), to(2), to(3)});
       HopRecord r;
       r.hop = h.hop;
       r.t_start = h.t_start;

@@ -171,6 +171,43 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
 }
 
+TEST_F(CliTest, HopEventsCarryTheBodyState) {
+  // Touchdown and takeoff rows give the COM at the event: about r0 = 0.7 m high (leg angle
+  // near 0.1 rad), moving forward at about the gait's 0.5 m/s, and ahead of the touchdown
+  // position at the takeoff that follows.
+  const Result r = RunCli(Scenario("default.xml") + " --hops 4 --out " + Out("run"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::vector<std::string> events = Lines(ReadFile(dir_ / "run" / "events.csv"));
+  ASSERT_EQ(events[0], "t,hop,type,x,y,xd,yd");
+  int checked = 0;
+  double x_td = 0.0;
+  for (size_t i = 1; i < events.size(); ++i) {
+    std::istringstream row(events[i]);
+    std::string t, hop, type;
+    double x = 0, y = 0, xd = 0, yd = 0;
+    char comma = 0;
+    std::getline(row, t, ',');
+    std::getline(row, hop, ',');
+    std::getline(row, type, ',');
+    row >> x >> comma >> y >> comma >> xd >> comma >> yd;
+    ASSERT_FALSE(row.fail()) << events[i];
+    if (type != "touchdown" && type != "takeoff") continue;
+    EXPECT_GT(y, 0.6) << events[i];
+    EXPECT_LT(y, 0.75) << events[i];
+    EXPECT_GT(xd, 0.3) << events[i];
+    EXPECT_LT(xd, 0.7) << events[i];
+    if (type == "touchdown") {
+      EXPECT_LT(yd, 0.0) << events[i];  // falling
+      x_td = x;
+    } else {
+      EXPECT_GT(yd, 0.0) << events[i];  // rising
+      EXPECT_GT(x, x_td + 0.05) << events[i];
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 8);
+}
+
 TEST_F(CliTest, EveryShippedScenarioRuns) {
   int count = 0;
   for (const auto& entry : fs::directory_iterator(std::string(DDOC_MODELS_DIR) + "/scenarios")) {
