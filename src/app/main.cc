@@ -205,6 +205,8 @@ int Run(int argc, char** argv) {
   config.method = ToPluginMethod(s.method);
   config.model = params;
   config.gait.forward_speed = s.forward_speed;
+  if (s.gait_k0_hip) config.gait.k0_hip = *s.gait_k0_hip;
+  if (s.gait_k0_leg) config.gait.k0_leg = *s.gait_k0_leg;
   const LearningOverrides& l = s.learning;
   if (l.c) config.learner.c = *l.c;
   if (l.gamma) config.learner.gamma = *l.gamma;

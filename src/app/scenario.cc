@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "ddoc/hopper/hopper_model.h"
+
 namespace ddoc::app {
 namespace {
 
@@ -179,6 +181,8 @@ Scenario LoadScenario(const std::string& path) {
       l.initial_hops = OptionalCount(path, e, "initial_hops");
     } else if (tag == "gait") {
       s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
+      s.gait_k0_hip = OptionalDouble(path, e, "k0_hip");
+      s.gait_k0_leg = OptionalDouble(path, e, "k0_leg");
     } else {
       Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
                        "duration, push, learning or gait)");
@@ -225,6 +229,17 @@ void ValidateScenario(const Scenario& s) {
   if (l.cyclic_value && !(*l.cyclic_value >= 0.0 && *l.cyclic_value <= 1.0)) {
     Fail(f, 0, "learning cyclic_value must be in [0, 1]");
   }
+  auto in_bounds = [&](const std::optional<double>& v, const char* name, double lo, double hi) {
+    if (v && !(*v >= lo && *v <= hi)) {
+      std::ostringstream msg;
+      msg << "gait " << name << " = " << *v << " is outside the input bounds [" << lo << ", " << hi
+          << "]";
+      Fail(f, 0, msg.str());
+    }
+  };
+  const Eigen::Vector4d lo = hopper::InputLowerBound(), hi = hopper::InputUpperBound();
+  in_bounds(s.gait_k0_hip, "k0_hip", lo(hopper::kK0hip), hi(hopper::kK0hip));
+  in_bounds(s.gait_k0_leg, "k0_leg", lo(hopper::kK0leg), hi(hopper::kK0leg));
   for (const Push& p : s.pushes) {
     if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
     if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");

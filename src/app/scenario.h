@@ -80,6 +80,9 @@ struct Scenario {
   double seconds = 0.0;              // stop after this simulated time (0 = use hops)
   std::vector<Push> pushes;          // in time order
   double forward_speed = 0.0;        // forward speed of the nominal gait [m/s]
+  // Constant stiffness commands of the nominal gait (NominalGaitSettings; unset = 50 N m/rad and
+  // 2000 N/m). They must lie in the input bounds [10, 150] and [1780, 2350].
+  std::optional<double> gait_k0_hip, gait_k0_leg;
   LearningOverrides learning;        // <learning .../>
 };
 

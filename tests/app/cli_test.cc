@@ -208,6 +208,29 @@ TEST_F(CliTest, HopEventsCarryTheBodyState) {
   EXPECT_EQ(checked, 8);
 }
 
+TEST_F(CliTest, GaitStiffnessReachesTheInitialLaw) {
+  // <gait k0_hip> sets the nominal gait's constant hip stiffness command, which the initial law
+  // u^0 (OC-FB on the model) starts from: its commanded k0_hip stays near 30, not the default 50.
+  std::ofstream(dir_ / "soft.xml")
+      << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR << "/hopper_m8.xml'/>"
+      << "<model M='8' c_d='0.01'/><method name='ocfb'/><duration hops='2'/>"
+      << "<gait speed='0.5' k0_hip='30'/></ddoc_scenario>";
+  const Result r = RunCli(Out("soft.xml") + " --out " + Out("run"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::vector<std::string> rows = Lines(ReadFile(dir_ / "run" / "trajectory.csv"));
+  ASSERT_GT(rows.size(), 100u);
+  ASSERT_NE(rows[0].find(",k0_hip,k0_leg,push"), std::string::npos) << rows[0];
+  double sum = 0.0;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    // k0_hip is the third column from the end.
+    const std::string& row = rows[i];
+    const size_t c3 = row.rfind(',', row.rfind(',', row.rfind(',') - 1) - 1);
+    sum += std::stod(row.substr(c3 + 1));
+  }
+  const double mean = sum / static_cast<double>(rows.size() - 1);
+  EXPECT_NEAR(mean, 30.0, 3.0);
+}
+
 TEST_F(CliTest, EveryShippedScenarioRuns) {
   int count = 0;
   for (const auto& entry : fs::directory_iterator(std::string(DDOC_MODELS_DIR) + "/scenarios")) {

@@ -111,6 +111,28 @@ TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
   ExpectError(buf, {"cyclic_value"});
 }
 
+TEST_F(ScenarioTest, GaitStiffness) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><gait %s/></ddoc_scenario>";
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), fmt, "speed='0.4' k0_hip='30' k0_leg='2100'");
+  Scenario s = LoadScenario(Write(buf));
+  EXPECT_DOUBLE_EQ(s.forward_speed, 0.4);
+  ASSERT_TRUE(s.gait_k0_hip.has_value());
+  EXPECT_DOUBLE_EQ(*s.gait_k0_hip, 30.0);
+  ASSERT_TRUE(s.gait_k0_leg.has_value());
+  EXPECT_DOUBLE_EQ(*s.gait_k0_leg, 2100.0);
+  std::snprintf(buf, sizeof(buf), fmt, "speed='0.4'");
+  s = LoadScenario(Write(buf));
+  EXPECT_FALSE(s.gait_k0_hip.has_value());
+  EXPECT_FALSE(s.gait_k0_leg.has_value());
+  std::snprintf(buf, sizeof(buf), fmt, "k0_hip='5'");
+  ExpectError(buf, {"k0_hip = 5", "[10, 150]"});
+  std::snprintf(buf, sizeof(buf), fmt, "k0_leg='2400'");
+  ExpectError(buf, {"k0_leg = 2400", "[1780, 2350]"});
+  std::snprintf(buf, sizeof(buf), fmt, "k0_hip='soft'");
+  ExpectError(buf, {"k0_hip"});
+}
+
 TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
   char buf[256];
