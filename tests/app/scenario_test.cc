@@ -34,6 +34,13 @@ class ScenarioTest : public ::testing::Test {
     return p.string();
   }
 
+  // The scenario text of a printf format with one %s filled by attrs.
+  static std::string Fill(const char* fmt, const char* attrs) {
+    char buf[512];
+    std::snprintf(buf, sizeof(buf), fmt, attrs);
+    return buf;
+  }
+
   // Expects LoadScenario to throw with a message containing every needle.
   void ExpectError(const std::string& text, std::initializer_list<const char*> needles) {
     const std::string path = Write(text);
@@ -79,89 +86,68 @@ TEST_F(ScenarioTest, ParsesEveryElementAndResolvesPathsAgainstTheFile) {
 
 TEST_F(ScenarioTest, LearningRegularizationScaling) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='per_input'");
-  Scenario s = LoadScenario(Write(buf));
+  Scenario s = LoadScenario(Write(Fill(fmt, "regularization_scaling='per_input'")));
   ASSERT_TRUE(s.learning.per_input_regularization.has_value());
   EXPECT_TRUE(*s.learning.per_input_regularization);
-  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='scalar'");
-  s = LoadScenario(Write(buf));
+  s = LoadScenario(Write(Fill(fmt, "regularization_scaling='scalar'")));
   ASSERT_TRUE(s.learning.per_input_regularization.has_value());
   EXPECT_FALSE(*s.learning.per_input_regularization);
-  std::snprintf(buf, sizeof(buf), fmt, "");
-  EXPECT_FALSE(LoadScenario(Write(buf)).learning.per_input_regularization.has_value());
-  std::snprintf(buf, sizeof(buf), fmt, "regularization_scaling='diag'");
-  ExpectError(buf, {"<learning>", "regularization_scaling=\"diag\"", "per_input"});
+  EXPECT_FALSE(LoadScenario(Write(Fill(fmt, ""))).learning.per_input_regularization.has_value());
+  ExpectError(Fill(fmt, "regularization_scaling='diag'"),
+              {"<learning>", "regularization_scaling=\"diag\"", "per_input"});
 }
 
 TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='0.9' alpha_initial='0.3'");
-  const Scenario s = LoadScenario(Write(buf));
+  const Scenario s = LoadScenario(Write(Fill(fmt, "cyclic_value='0.9' alpha_initial='0.3'")));
   ASSERT_TRUE(s.learning.cyclic_value.has_value());
   EXPECT_DOUBLE_EQ(*s.learning.cyclic_value, 0.9);
   ASSERT_TRUE(s.learning.alpha_initial.has_value());
   EXPECT_DOUBLE_EQ(*s.learning.alpha_initial, 0.3);
-  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='1.5'");
-  ExpectError(buf, {"cyclic_value", "[0, 1]"});
-  std::snprintf(buf, sizeof(buf), fmt, "alpha_initial='0'");
-  ExpectError(buf, {"alpha_initial", "(0, 1]"});
-  std::snprintf(buf, sizeof(buf), fmt, "cyclic_value='abc'");
-  ExpectError(buf, {"cyclic_value"});
+  ExpectError(Fill(fmt, "cyclic_value='1.5'"), {"cyclic_value", "[0, 1]"});
+  ExpectError(Fill(fmt, "alpha_initial='0'"), {"alpha_initial", "(0, 1]"});
+  ExpectError(Fill(fmt, "cyclic_value='abc'"), {"cyclic_value"});
 }
 
 TEST_F(ScenarioTest, GaitStiffness) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><gait %s/></ddoc_scenario>";
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, "speed='0.4' k0_hip='30' k0_leg='2100'");
-  Scenario s = LoadScenario(Write(buf));
+  Scenario s = LoadScenario(Write(Fill(fmt, "speed='0.4' k0_hip='30' k0_leg='2100'")));
   EXPECT_DOUBLE_EQ(s.forward_speed, 0.4);
   ASSERT_TRUE(s.gait_k0_hip.has_value());
   EXPECT_DOUBLE_EQ(*s.gait_k0_hip, 30.0);
   ASSERT_TRUE(s.gait_k0_leg.has_value());
   EXPECT_DOUBLE_EQ(*s.gait_k0_leg, 2100.0);
-  std::snprintf(buf, sizeof(buf), fmt, "speed='0.4'");
-  s = LoadScenario(Write(buf));
+  s = LoadScenario(Write(Fill(fmt, "speed='0.4'")));
   EXPECT_FALSE(s.gait_k0_hip.has_value());
   EXPECT_FALSE(s.gait_k0_leg.has_value());
-  std::snprintf(buf, sizeof(buf), fmt, "k0_hip='5'");
-  ExpectError(buf, {"k0_hip = 5", "[10, 150]"});
-  std::snprintf(buf, sizeof(buf), fmt, "k0_leg='2400'");
-  ExpectError(buf, {"k0_leg = 2400", "[1780, 2350]"});
-  std::snprintf(buf, sizeof(buf), fmt, "k0_hip='soft'");
-  ExpectError(buf, {"k0_hip"});
+  ExpectError(Fill(fmt, "k0_hip='5'"), {"k0_hip = 5", "[10, 150]"});
+  ExpectError(Fill(fmt, "k0_leg='2400'"), {"k0_leg = 2400", "[1780, 2350]"});
+  ExpectError(Fill(fmt, "k0_hip='soft'"), {"k0_hip"});
 }
 
 TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
-  char buf[256];
-  std::snprintf(buf, sizeof(buf), fmt, "terminal='event' initial_hops='2' reference='gait'");
-  Scenario s = LoadScenario(Write(buf));
+  Scenario s = LoadScenario(Write(Fill(fmt, "terminal='event' initial_hops='2' reference='gait'")));
   ASSERT_TRUE(s.learning.anchor_reference.has_value());
   EXPECT_TRUE(*s.learning.anchor_reference);
   ASSERT_TRUE(s.learning.terminal_event.has_value());
   EXPECT_TRUE(*s.learning.terminal_event);
   ASSERT_TRUE(s.learning.initial_hops.has_value());
   EXPECT_EQ(*s.learning.initial_hops, 2);
-  std::snprintf(buf, sizeof(buf), fmt, "terminal='time'");
-  s = LoadScenario(Write(buf));
+  s = LoadScenario(Write(Fill(fmt, "terminal='time'")));
   ASSERT_TRUE(s.learning.terminal_event.has_value());
   EXPECT_FALSE(*s.learning.terminal_event);
   EXPECT_FALSE(s.learning.initial_hops.has_value());
   EXPECT_FALSE(s.learning.anchor_reference.has_value());
-  std::snprintf(buf, sizeof(buf), fmt, "reference='own'");
-  s = LoadScenario(Write(buf));
+  s = LoadScenario(Write(Fill(fmt, "reference='own'")));
   ASSERT_TRUE(s.learning.anchor_reference.has_value());
   EXPECT_FALSE(*s.learning.anchor_reference);
-  std::snprintf(buf, sizeof(buf), fmt, "reference='nominal'");
-  ExpectError(buf, {"<learning>", "reference=\"nominal\"", "own or gait"});
-  std::snprintf(buf, sizeof(buf), fmt, "terminal='takeoff'");
-  ExpectError(buf, {"<learning>", "terminal=\"takeoff\"", "time or event"});
-  std::snprintf(buf, sizeof(buf), fmt, "initial_hops='0'");
-  ExpectError(buf, {"initial_hops", ">= 1"});
-  std::snprintf(buf, sizeof(buf), fmt, "initial_hops='1.5'");
-  ExpectError(buf, {"initial_hops", "integer"});
+  ExpectError(Fill(fmt, "reference='nominal'"),
+              {"<learning>", "reference=\"nominal\"", "own or gait"});
+  ExpectError(Fill(fmt, "terminal='takeoff'"),
+              {"<learning>", "terminal=\"takeoff\"", "time or event"});
+  ExpectError(Fill(fmt, "initial_hops='0'"), {"initial_hops", ">= 1"});
+  ExpectError(Fill(fmt, "initial_hops='1.5'"), {"initial_hops", "integer"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
