@@ -546,6 +546,11 @@ struct CyclicLq {
     traj.T = Vector::Constant(1, T);
     traj.x0 = traj.modes[0].x.col(0);
   }
+  // Sizes `pass` for this problem with `settings` and runs it on the cycle.
+  void RunPass(BackwardPass* pass, const BackwardPassSettings& settings) const {
+    pass->Allocate(problem, 100, settings);
+    pass->Run(traj);
+  }
   // kRiccati without regularization, swept until P(0) is settled to 1e-12.
   static BackwardPassSettings Settings(double cyclic_value) {
     BackwardPassSettings settings;
@@ -577,8 +582,7 @@ TEST(BackwardPass, CyclicValueConvergesToTheStationaryRiccatiSolution) {
   CyclicLq lq;
   const BackwardPassSettings settings = CyclicLq::Settings(1.0);
   BackwardPass pass;
-  pass.Allocate(lq.problem, 100, settings);
-  pass.Run(lq.traj);
+  lq.RunPass(&pass, settings);
   const double care = lq.r * (lq.a + std::sqrt(lq.a * lq.a + lq.q * lq.b * lq.b / lq.r)) /
                       (lq.b * lq.b);
   EXPECT_NEAR(pass.P(0, 0)(0, 0), care, 1e-6 * care);
@@ -588,8 +592,7 @@ TEST(BackwardPass, CyclicValueConvergesToTheStationaryRiccatiSolution) {
   BackwardPassSettings single = settings;
   single.cyclic_value = 0.0;
   BackwardPass plain;
-  plain.Allocate(lq.problem, 100, single);
-  plain.Run(lq.traj);
+  lq.RunPass(&plain, single);
   EXPECT_EQ(plain.sweeps(), 1);
   EXPECT_NEAR(plain.P(0, 0)(0, 0), lq.Flow(0.0), 1e-6 * lq.Flow(0.0));
   EXPECT_LT(plain.P(0, 0)(0, 0), 0.8 * care);
@@ -607,8 +610,7 @@ TEST(BackwardPass, DiscountedCyclicValueIsAFixedPointOfTheCycleMap) {
   CyclicLq lq;
   const BackwardPassSettings settings = CyclicLq::Settings(0.6);
   BackwardPass pass;
-  pass.Allocate(lq.problem, 100, settings);
-  pass.Run(lq.traj);
+  lq.RunPass(&pass, settings);
   const double P0 = pass.P(0, 0)(0, 0);
   EXPECT_NEAR(P0, lq.Flow(0.6 * P0), 1e-6 * P0);
   EXPECT_NEAR(pass.P(0, 60)(0, 0), 0.6 * P0, 1e-9 * P0);  // the terminal condition
@@ -616,8 +618,7 @@ TEST(BackwardPass, DiscountedCyclicValueIsAFixedPointOfTheCycleMap) {
   BackwardPassSettings lyap = settings;
   lyap.equation = BackwardEquation::kLyapunov;
   BackwardPass lp;
-  lp.Allocate(lq.problem, 100, lyap);
-  lp.Run(lq.traj);
+  lq.RunPass(&lp, lyap);
   EXPECT_EQ(lp.sweeps(), 1);
   EXPECT_EQ(lp.P(0, 60)(0, 0), 0.0);
 }
@@ -628,8 +629,7 @@ TEST(BackwardPass, CyclicValueRunDoesNotAllocateAndRejectsBadWeights) {
   settings.equation = BackwardEquation::kRiccati;
   settings.cyclic_value = 0.9;
   BackwardPass pass;
-  pass.Allocate(lq.problem, 100, settings);
-  pass.Run(lq.traj);
+  lq.RunPass(&pass, settings);
   pass.ResetCyclicValue();
   {
     MallocCounter counter;
