@@ -41,6 +41,17 @@ struct ScalarLq {
   }
 };
 
+// The one-mode scalar problems of this file: |u| <= 10, duration in [0.1, 5], no surface.
+void SetScalarProblem(const SwitchedSystem& sys, const SwitchedCost& cost, Problem* problem) {
+  problem->system = &sys;
+  problem->cost = &cost;
+  problem->bounds.u_min = Vector::Constant(1, -10);
+  problem->bounds.u_max = Vector::Constant(1, 10);
+  problem->bounds.duration_min = Vector::Constant(1, 0.1);
+  problem->bounds.duration_max = Vector::Constant(1, 5);
+  problem->surface_weights = Vector::Zero(1);
+}
+
 struct ScalarLqSetup {
   ScalarLq lq;
   LinearSwitchedSystem sys;
@@ -52,13 +63,7 @@ struct ScalarLqSetup {
             {Matrix::Identity(1, 1)}),
         cost({Matrix::Constant(1, 1, l.q)}, {Matrix::Constant(1, 1, l.r)}, {0.0},
              {Matrix::Constant(1, 1, l.s)}, {Vector::Zero(1)}) {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -10);
-    problem.bounds.u_max = Vector::Constant(1, 10);
-    problem.bounds.duration_min = Vector::Constant(1, 0.1);
-    problem.bounds.duration_max = Vector::Constant(1, 5);
-    problem.surface_weights = Vector::Zero(1);
+    SetScalarProblem(sys, cost, &problem);
   }
   Trajectory Exact(int N) const {
     Trajectory traj;
@@ -531,13 +536,7 @@ struct CyclicLq {
   Problem problem;
   Trajectory traj;
   CyclicLq() {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -10);
-    problem.bounds.u_max = Vector::Constant(1, 10);
-    problem.bounds.duration_min = Vector::Constant(1, 0.1);
-    problem.bounds.duration_max = Vector::Constant(1, 5);
-    problem.surface_weights = Vector::Zero(1);
+    SetScalarProblem(sys, cost, &problem);
     traj.modes.resize(1);
     const int N = 61;
     traj.modes[0].t = Vector::LinSpaced(N, 0.0, T);
