@@ -14,6 +14,7 @@
 #include "ddoc/plant.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
+#include "ddoc/return_map.h"
 #include "ddoc/switched_system.h"
 #include "ddoc/switching_time_update.h"
 #include "ddoc/time_normalization.h"
