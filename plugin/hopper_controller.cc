@@ -159,12 +159,32 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
   have_prev_td_ = false;
   last_event_ = d->time;  // the reset state is a takeoff: the foot starts on the ground
   u_ = gait_.u0;
+  frozen_ = false;
   learner_.reset();
   if (config_.method != Method::kOcfb) {
     learner_ = std::make_unique<Learner>(problem_, config_.learner);
   }
   policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
   initial_policy_ = policy_;  // the model learner no longer changes: every call gives this slot
+  policy_->BeginTrial();
+}
+
+void HopperController::RestartHop(const mjModel* m, mjData* d,
+                                  const Eigen::Matrix<double, 14, 1>& x) {
+  if (!x.allFinite()) {
+    throw InvalidArgument("HopperController::RestartHop: the start state is not finite");
+  }
+  const double t = d->time;
+  mj_resetData(m, d);
+  d->time = t;
+  VsaState vs;
+  WriteFlightState(map_, x.data(), d, &vs);
+  vsa_.Reset(vs);
+  mode_ = hopper::kFlight;
+  started_ = false;  // the next step begins the hop (BeginHop) at this state
+  last_event_ = t;
+  have_prev_td_ = false;
+  stance_first_ = false;
   policy_->BeginTrial();
 }
 
@@ -399,7 +419,12 @@ void HopperController::EndHop() {
   r.body_touchdown = body_td_;
 
   // The offline part for the next hop.
-  if (config_.method == Method::kOcfb) {
+  if (frozen_) {
+    cost_.SetReference(trial_.x0);
+    r.accepted = true;
+    r.learner_cost = EvaluateCost(problem_, trial_).total;
+    if (learner_) r.status = learner_->status();
+  } else if (config_.method == Method::kOcfb) {
     r.accepted = true;
     r.learner_cost = EvaluateCost(problem_, trial_).total;
     policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);

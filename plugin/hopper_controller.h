@@ -220,6 +220,23 @@ class HopperController {
   void set_hold(bool hold) { hold_ = hold; }
   bool hold() const { return hold_; }
 
+  /// Freezes the law: from the next hop boundary on, every hop runs the law of the hop that is
+  /// running now (no learning, no line search; reports are still written, with accepted = true
+  /// and learner_cost the measured cost). For deploying a learned law and for measuring its
+  /// return map (tools: ddoc-return-map). Reset() unfreezes.
+  void Freeze() { frozen_ = true; }
+  bool frozen() const { return frozen_; }
+
+  /// Abandons the running hop (no report) and starts a new one at the flight state x (14, model
+  /// coordinates: the takeoff state of the new hop) at the current simulated time, with the law
+  /// the running hop used. mjData is reset first (mj_resetData, time kept), so the hop that
+  /// follows depends on x and the law only. Call between steps, never from inside Compute.
+  /// Throws InvalidArgument when x is not finite.
+  void RestartHop(const mjModel* m, mjData* d, const Eigen::Matrix<double, 14, 1>& x);
+
+  /// The measured flight state at the start (takeoff) of the running hop.
+  const Eigen::Matrix<double, 14, 1>& hop_start_state() const { return x0_hop_; }
+
   /// Reports of completed hops since the last call (moves them out).
   std::vector<HopReport> TakeReports();
 
@@ -294,6 +311,7 @@ class HopperController {
   bool started_ = false;        // first step after Reset seen
   bool in_compute_ = false;     // re-entry guard
   bool hold_ = false;           // set_hold()
+  bool frozen_ = false;         // Freeze()
   double last_time_ = 0.0;      // simulated time of the last new step
   double phase_start_ = 0.0;    // absolute time the current mode started
   double hop_start_ = 0.0;      // absolute time the hop started (trial t = 0)

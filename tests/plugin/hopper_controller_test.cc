@@ -336,5 +336,60 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   EXPECT_EQ(rig.c().learner()->iteration(), 0);
 }
 
+TEST(HopperControllerTest, FrozenLawStopsLearningAndRestartsAreDeterministic) {
+  // Freeze(): the learner sees no more trials (its iteration and nominal cost stay), reports go
+  // on. RestartHop(x): the hop that follows depends on x and the law only, so two restarts from
+  // the same takeoff state end at the same next takeoff state, and a different start state ends
+  // elsewhere. These are what ddoc-return-map's finite differences rely on.
+  Rig rig("hopper.xml");
+  ASSERT_TRUE(rig.ok());
+  auto next_takeoff = [&rig]() {
+    const int hop = rig.c().hop();
+    while (rig.c().hop() == hop && rig.d()->time < 30.0) {
+      rig.Step();
+      ExpectInputInBounds(rig.c());
+      EXPECT_FALSE(rig.c().failed()) << rig.c().error();
+    }
+    return rig.c().TakeReports();
+  };
+  while (rig.c().hop() < 5) ASSERT_FALSE(next_takeoff().empty());
+  const int iteration = rig.c().learner()->iteration();
+  const double nominal = rig.c().learner()->nominal_cost();
+  rig.c().Freeze();
+  EXPECT_TRUE(rig.c().frozen());
+  for (int k = 0; k < 3; ++k) {
+    const std::vector<HopReport> reports = next_takeoff();
+    ASSERT_EQ(reports.size(), 1u);
+    EXPECT_TRUE(reports[0].accepted);
+    EXPECT_TRUE(std::isfinite(reports[0].learner_cost));
+  }
+  EXPECT_EQ(rig.c().learner()->iteration(), iteration);
+  EXPECT_EQ(rig.c().learner()->nominal_cost(), nominal);
+
+  const Eigen::Matrix<double, 14, 1> x0 = rig.c().hop_start_state();
+  std::vector<Eigen::Matrix<double, 14, 1>> ends;
+  for (double dphi : {0.0, 0.0, 0.01}) {
+    Eigen::Matrix<double, 14, 1> x = x0;
+    x(hopper::kPhi) += dphi;
+    rig.c().RestartHop(rig.m(), rig.d(), x);
+    ASSERT_EQ(next_takeoff().size(), 1u);
+    ends.push_back(rig.c().hop_start_state());
+  }
+  EXPECT_EQ(ends[0], ends[1]);
+  EXPECT_GT((ends[2] - ends[0]).norm(), 1e-4);
+  EXPECT_TRUE(ends[2].allFinite());
+
+  Eigen::Matrix<double, 14, 1> bad = x0;
+  bad(hopper::kYd) = std::numeric_limits<double>::quiet_NaN();
+  try {
+    rig.c().RestartHop(rig.m(), rig.d(), bad);
+    ADD_FAILURE() << "a NaN start state was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("not finite"), std::string::npos) << e.what();
+  }
+  rig.c().Reset(rig.m(), rig.d());
+  EXPECT_FALSE(rig.c().frozen());
+}
+
 }  // namespace
 }  // namespace ddoc::plugin
