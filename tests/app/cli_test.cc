@@ -21,8 +21,8 @@ struct Result {
   std::string output;  // stdout + stderr
 };
 
-Result RunCli(const std::string& args) {
-  const std::string cmd = std::string(DDOC_HOPPER_BIN) + " " + args + " 2>&1";
+Result RunBinary(const std::string& binary, const std::string& args) {
+  const std::string cmd = binary + " " + args + " 2>&1";
   Result r;
   std::FILE* p = popen(cmd.c_str(), "r");
   if (p == nullptr) return r;
@@ -33,6 +33,8 @@ Result RunCli(const std::string& args) {
   r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
+
+Result RunCli(const std::string& args) { return RunBinary(DDOC_HOPPER_BIN, args); }
 
 std::string Scenario(const std::string& name) {
   return std::string(DDOC_MODELS_DIR) + "/scenarios/" + name;
@@ -241,6 +243,29 @@ TEST_F(CliTest, EveryShippedScenarioRuns) {
     EXPECT_EQ(r.code, 0) << name << ": " << r.output;
   }
   EXPECT_GE(count, 8);
+}
+
+TEST_F(CliTest, ReturnMapOfAFrozenLaw) {
+  // ddoc-return-map end to end on the default scenario, kept short: the law of hop 3 frozen, 3
+  // settling hops, one hop per perturbed run. The 8 kg robot's law is stable, so all 26 perturbed
+  // runs land and every eigenvalue is finite; bad input exits 2 and names the flag.
+  const Result bad = RunBinary(DDOC_RETURN_MAP_BIN, Scenario("default.xml") + " --settle 1");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--settle must be >= 2"), std::string::npos) << bad.output;
+
+  const Result r = RunBinary(DDOC_RETURN_MAP_BIN, Scenario("default.xml") +
+                                                      " --freeze-hop 3 --settle 3 --hops 1 --out " +
+                                                      dir_.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("spectral radius"), std::string::npos) << r.output;
+  const std::string json = ReadFile(dir_ / "return_map.json");
+  EXPECT_NE(json.find("\"runs\": 26"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"runs_fell\": 0"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"eigenvalues\""), std::string::npos) << json;
+  EXPECT_EQ(json.find("nan"), std::string::npos) << json;
+  // settle.csv: 3 learning hops, 3 frozen, 3 restarted; pairs.csv: 26 runs of one hop.
+  EXPECT_EQ(Lines(ReadFile(dir_ / "settle.csv")).size(), 1u + 9u);
+  EXPECT_EQ(Lines(ReadFile(dir_ / "pairs.csv")).size(), 1u + 26u);
 }
 
 }  // namespace
