@@ -35,6 +35,11 @@ struct OnlineControllerSettings {
   bool alpha_scales_feedback = true;
   /// kappa: multiplies the state feedback (L_uz + F_u^T P) dx of (34) (1: as printed).
   double feedback_scale = 1.0;
+  /// Per-component feedback scale (NOT the paper; empty = all ones, as printed): one vector per
+  /// mode k with that mode's state dimension; component i of dx is multiplied by
+  /// state_feedback_scale[k](i) before the gain of (34). Entries must be finite and >= 0. Used by
+  /// the hopper to soften the flight pitch feedback of learned laws (see ddoc-return-map).
+  std::vector<Vector> state_feedback_scale;
   BoxQPSettings qp;  ///< settings of the m-dimensional box QP
 };
 

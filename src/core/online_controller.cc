@@ -3,8 +3,36 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace ddoc {
+
+namespace {
+
+void CheckStateFeedbackScale(const std::vector<Vector>& scale, const SwitchedSystem& sys) {
+  if (scale.empty()) return;
+  const std::string what = "OnlineControllerSettings: state_feedback_scale";
+  if (static_cast<int>(scale.size()) != sys.num_modes()) {
+    throw InvalidArgument(what + " has " + std::to_string(scale.size()) + " vectors, expected " +
+                          std::to_string(sys.num_modes()) + " (one per mode) or none");
+  }
+  for (int k = 0; k < sys.num_modes(); ++k) {
+    const Vector& v = scale[static_cast<size_t>(k)];
+    if (v.size() != sys.state_dim(k)) {
+      throw InvalidArgument(what + "[" + std::to_string(k) + "] has " + std::to_string(v.size()) +
+                            " entries, expected the state dimension " +
+                            std::to_string(sys.state_dim(k)));
+    }
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      if (!(v(i) >= 0.0) || !std::isfinite(v(i))) {
+        throw InvalidArgument(what + "[" + std::to_string(k) + "](" + std::to_string(i) +
+                              ") = " + std::to_string(v(i)) + ", expected finite and >= 0");
+      }
+    }
+  }
+}
+
+}  // namespace
 
 void OnlineController::Allocate(const Problem& problem, int max_samples,
                                 const OnlineControllerSettings& settings) {
@@ -17,9 +45,10 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
     throw InvalidArgument("OnlineControllerSettings: feedback_scale = " +
                           std::to_string(settings.feedback_scale) + ", expected finite and >= 0");
   }
+  const SwitchedSystem& sys = *problem.system;
+  CheckStateFeedbackScale(settings.state_feedback_scale, sys);
   problem_ = &problem;
   settings_ = settings;
-  const SwitchedSystem& sys = *problem.system;
   K_ = sys.num_modes();
   m_ = sys.input_dim();
   n_max_ = sys.max_state_dim();
@@ -184,6 +213,14 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   // dx and b of (34): b = (1-w)(Kx_0 dx + c_0) + w (Kx_1 dx + c_1).
   auto dx = dx_.head(n);
   dx = x_measured - ((1.0 - w) * x_.col(s0).head(n) + w * x_.col(s1).head(n));
+  if (!settings_.state_feedback_scale.empty()) {
+    if (static_cast<int>(settings_.state_feedback_scale.size()) != K_ ||
+        settings_.state_feedback_scale[static_cast<size_t>(k)].size() != n) {
+      throw InvalidArgument("OnlineController::Step: state_feedback_scale does not match the "
+                            "modes' state dimensions");
+    }
+    dx.array() *= settings_.state_feedback_scale[static_cast<size_t>(k)].array();
+  }
   Eigen::Map<const Matrix> K0(Kx_.col(s0).data(), m_, n);
   Eigen::Map<const Matrix> K1(Kx_.col(s1).data(), m_, n);
   b_ = (1.0 - w) * c_.col(s0) + w * c_.col(s1);

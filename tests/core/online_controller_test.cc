@@ -3,6 +3,7 @@
 // OnlineController (33)-(34): against an independent evaluation of (33)-(34), the time
 // mapping and its clamping, robustness to non-finite input, int |du|^2, no allocation.
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -107,6 +108,30 @@ TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
   EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
 }
 
+// Steps `ctrl` at random deviations dx from three samples of each mode and compares u with the
+// brute-force box QP (33) for b = expected_b(k, j, dx) (an independent (34)).
+void ExpectStepsMatchQp(const ControlSetup& s, OnlineController& ctrl, double alpha, unsigned seed,
+                        const std::function<Vector(int, int, const Vector&)>& expected_b) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> nd;
+  for (int k = 0; k < 2; ++k) {
+    const int n = s.sys->state_dim(k);
+    for (int j : {0, 33, s.pass.num_samples(k) - 1}) {
+      const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
+      Vector dx(n);
+      for (int i = 0; i < n; ++i) dx(i) = 0.3 * nd(rng);
+      const Vector x = s.nominal.modes[k].x.col(j) + dx;
+      const Vector unom = s.nominal.modes[k].u.col(j);
+      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * expected_b(k, j, dx),
+                                                 s.problem.bounds.u_min - unom,
+                                                 s.problem.bounds.u_max - unom);
+      Vector u(3);
+      ctrl.Step(k, t, x, u);
+      EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
+    }
+  }
+}
+
 TEST(OnlineController, FeedbackScaleMultipliesOnlyTheStateFeedback) {
   // b = kappa (L_uz + F_u^T P)_x dx + (L_uz + F_u^T P)_T dT + L_u + F_u^T p.
   ControlSetup s(3);
@@ -118,31 +143,63 @@ TEST(OnlineController, FeedbackScaleMultipliesOnlyTheStateFeedback) {
   OnlineController ctrl;
   ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
   ctrl.Load(s.nominal, s.pass, alpha, dT);
-  std::mt19937 rng(5);
-  std::normal_distribution<double> nd;
-  for (int k = 0; k < 2; ++k) {
-    const int n = s.sys->state_dim(k);
-    for (int j : {0, 33, s.pass.num_samples(k) - 1}) {
-      const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
-      Vector dx(n);
-      for (int i = 0; i < n; ++i) dx(i) = 0.3 * nd(rng);
-      const Vector x = s.nominal.modes[k].x.col(j) + dx;
-      const Matrix G = s.pass.Gain(k, j);
-      const Vector b = kappa * G.leftCols(n) * dx + G.rightCols(2) * dT + s.pass.Feedforward(k, j);
-      const Vector unom = s.nominal.modes[k].u.col(j);
-      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * b,
-                                                 s.problem.bounds.u_min - unom,
-                                                 s.problem.bounds.u_max - unom);
-      Vector u(3);
-      ctrl.Step(k, t, x, u);
-      EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
-    }
-  }
+  ExpectStepsMatchQp(s, ctrl, alpha, 5, [&](int k, int j, const Vector& dx) {
+    const Matrix G = s.pass.Gain(k, j);
+    const int n = static_cast<int>(dx.size());
+    return Vector(kappa * G.leftCols(n) * dx + G.rightCols(2) * dT + s.pass.Feedforward(k, j));
+  });
   for (double bad : {-1.0, std::nan("")}) {
     settings.feedback_scale = bad;
     OnlineController c;
     EXPECT_THROW(c.Allocate(s.problem, 10, settings), InvalidArgument) << bad;
   }
+}
+
+TEST(OnlineController, StateFeedbackScaleMultipliesSingleComponents) {
+  // b = (L_uz + F_u^T P)_x diag(s_k) dx + (L_uz + F_u^T P)_T dT + L_u + F_u^T p, with s_k zeroing
+  // component 1 of mode 0 and halving component 2 of mode 1.
+  ControlSetup s(3);
+  const double alpha = 0.7;
+  Vector dT(2);
+  dT << -0.01, 0.02;
+  OnlineControllerSettings settings;
+  settings.state_feedback_scale = {Vector::Ones(4), Vector::Ones(3)};
+  settings.state_feedback_scale[0](1) = 0.0;
+  settings.state_feedback_scale[1](2) = 0.5;
+  OnlineController ctrl;
+  ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
+  ctrl.Load(s.nominal, s.pass, alpha, dT);
+  ExpectStepsMatchQp(s, ctrl, alpha, 6, [&](int k, int j, const Vector& dx) {
+    Vector scaled = dx;
+    if (k == 0) scaled(1) = 0.0;
+    if (k == 1) scaled(2) *= 0.5;
+    const Matrix G = s.pass.Gain(k, j);
+    const int n = static_cast<int>(dx.size());
+    return Vector(G.leftCols(n) * scaled + G.rightCols(2) * dT + s.pass.Feedforward(k, j));
+  });
+  // Wrong shapes and bad entries are named.
+  auto message = [&](const std::vector<Vector>& scale) {
+    OnlineControllerSettings bad;
+    bad.state_feedback_scale = scale;
+    OnlineController c;
+    try {
+      c.Allocate(s.problem, 10, bad);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({Vector::Ones(4)}).find("has 1 vectors, expected 2"), std::string::npos);
+  EXPECT_NE(message({Vector::Ones(4), Vector::Ones(4)}).find("state_feedback_scale[1] has 4"),
+            std::string::npos);
+  Vector negative = Vector::Ones(3);
+  negative(0) = -0.5;
+  EXPECT_NE(message({Vector::Ones(4), negative}).find("state_feedback_scale[1](0)"),
+            std::string::npos);
+  // Changed after Allocate to a wrong shape: Step throws instead of reading out of range.
+  ctrl.settings().state_feedback_scale = {Vector::Ones(2), Vector::Ones(3)};
+  Vector u(3);
+  EXPECT_THROW(ctrl.Step(0, 0.0, s.nominal.modes[0].x.col(0), u), InvalidArgument);
 }
 
 TEST(OnlineController, PerInputRegularizationSolvesTheRegularizedQp) {
