@@ -105,6 +105,19 @@ void HopperController::Initialize() {
     throw InvalidArgument("config.initial_hops must be >= 1, got " +
                           std::to_string(c.initial_hops));
   }
+  if (!(c.flight_pitch_feedback >= 0.0 && c.flight_pitch_feedback <= 1.0)) {
+    throw InvalidArgument("config.flight_pitch_feedback must be in [0, 1], got " +
+                          std::to_string(c.flight_pitch_feedback));
+  }
+  if (c.flight_pitch_feedback_from_hop < 0) {
+    throw InvalidArgument("config.flight_pitch_feedback_from_hop must be >= 0, got " +
+                          std::to_string(c.flight_pitch_feedback_from_hop));
+  }
+  if (c.flight_pitch_feedback != 1.0) {
+    pitch_scale_ = {Vector::Ones(hopper::kFlightDim), Vector::Ones(hopper::kStanceDim)};
+    pitch_scale_[hopper::kFlight](hopper::kPhi) = c.flight_pitch_feedback;
+    pitch_scale_[hopper::kFlight](hopper::kPhid) = c.flight_pitch_feedback;
+  }
   if (c.max_samples_per_mode < 10) {
     throw InvalidArgument("config.max_samples_per_mode must be >= 10, got " +
                           std::to_string(c.max_samples_per_mode));
@@ -462,9 +475,20 @@ void HopperController::EndHop() {
       policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
     }
   }
+  SetPitchFeedback();
   policy_->BeginTrial();
   reports_.push_back(r);
   ++hop_;
+}
+
+void HopperController::SetPitchFeedback() {
+  if (pitch_scale_.empty() || runs_initial_law()) return;  // u^0 keeps its feedback
+  std::vector<Vector>& scale = policy_->settings().state_feedback_scale;
+  if (hop_ + 1 >= config_.flight_pitch_feedback_from_hop) {
+    if (scale.empty()) scale = pitch_scale_;  // the learner's two slots: once each
+  } else if (!scale.empty()) {
+    scale.clear();
+  }
 }
 
 void MeasuredStartModelPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) {

@@ -148,6 +148,18 @@ struct ControllerConfig {
   /// but the inexact 12 kg robot falls EARLIER with Algorithm 1 (hop 8 vs 14; mRL hop 14 vs 7,
   /// OC-FB 6 either way). Off.
   bool zero_flight_leg_rate = false;
+  /// Multiplies the flight feedback on the body pitch phi and its rate phid in the laws Algorithm 1
+  /// (or mRL) learns, from hop flight_pitch_feedback_from_hop on (NOT the paper; 1 = as printed).
+  /// u^0 (OC-FB, warm-up, fallback) keeps full feedback. Found with ddoc-return-map on the inexact
+  /// 12 kg robot (inexact_m12_ext): the frozen learned law of hop 60 has a period-2 (alternating)
+  /// mode, eigenvalue -0.86 (least squares; -1.1 by central differences), made of pitch rate, leg
+  /// angle and leg rate, and it is the flight pitch feedback that drives it: scaling that feedback
+  /// by 0.5 in the frozen law removes it (spectral radius 0.56). Scaling it from hop 0 fails (the
+  /// initial law needs it: fall in hop 5-6); from hop 3 the 12 kg robot drifts off the gait (cost
+  /// 41). 0.5 from hop 10 (push_m12_ext_pitch.xml): the push basin of Algorithm 1 grows from 22/54
+  /// to 39/54 (README "Push basin").
+  double flight_pitch_feedback = 1.0;
+  int flight_pitch_feedback_from_hop = 10;
 };
 
 /// What happened in one hop (one trial), measured on the robot.
@@ -280,6 +292,7 @@ class HopperController {
   bool LearnerStoppedBeforeAccepting() const;
   void WriteHeld(const mjModel* m, mjData* d);
   void Sanitize();                       // u_ finite and inside the bounds
+  void SetPitchFeedback();               // flight_pitch_feedback on policy_ (learned laws only)
   void LoadPhaseTable();                 // from the running law's nominal (no allocation)
   double PolicyTime(double t_in_mode, const double* x);  // config.phase_time mapping
   double LegPhase(double r, double rd) const;
@@ -299,6 +312,7 @@ class HopperController {
   double model_cost_ = 0.0;
   int model_iterations_ = 0;
 
+  std::vector<Vector> pitch_scale_;  // state_feedback_scale of the learned laws (flight phi, phid)
   Vsa vsa_;
   Eigen::Vector4d u_ = Eigen::Vector4d::Zero();  // input held over the current step
   Eigen::Matrix<double, 14, 1> xf_;              // flight-state buffer

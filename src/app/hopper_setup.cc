@@ -108,6 +108,10 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
     config.model_learner.backward.terminal_event = *l.terminal_event;
   }
   if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
+  if (l.flight_pitch_feedback) config.flight_pitch_feedback = *l.flight_pitch_feedback;
+  if (l.flight_pitch_feedback_from_hop) {
+    config.flight_pitch_feedback_from_hop = *l.flight_pitch_feedback_from_hop;
+  }
   return config;
 }
 

@@ -179,6 +179,8 @@ Scenario LoadScenario(const std::string& path) {
       }
       l.delta_i = OptionalCount(path, e, "delta_i");
       l.initial_hops = OptionalCount(path, e, "initial_hops");
+      l.flight_pitch_feedback = OptionalDouble(path, e, "flight_pitch_feedback");
+      l.flight_pitch_feedback_from_hop = OptionalCount(path, e, "flight_pitch_feedback_from_hop");
     } else if (tag == "gait") {
       s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
       s.gait_k0_hip = OptionalDouble(path, e, "k0_hip");
@@ -223,6 +225,10 @@ void ValidateScenario(const Scenario& s) {
   positive(l.max_duration_step, "learning max_duration_step");
   if (l.regularization && *l.regularization < 0.0) Fail(f, 0, "learning regularization must be >= 0");
   if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) Fail(f, 0, "learning gamma must be in (0, 1)");
+  if (l.flight_pitch_feedback &&
+      !(*l.flight_pitch_feedback >= 0.0 && *l.flight_pitch_feedback <= 1.0)) {
+    Fail(f, 0, "learning flight_pitch_feedback must be in [0, 1]");
+  }
   if (l.alpha_initial && !(*l.alpha_initial > 0.0 && *l.alpha_initial <= 1.0)) {
     Fail(f, 0, "learning alpha_initial must be in (0, 1]");
   }

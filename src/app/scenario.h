@@ -65,6 +65,9 @@ struct LearningOverrides {
   // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
   // model gait's takeoff state: ControllerConfig::anchor_reference)
   std::optional<bool> anchor_reference;
+  // ControllerConfig::flight_pitch_feedback (in [0, 1]) and flight_pitch_feedback_from_hop (>= 1)
+  std::optional<double> flight_pitch_feedback;
+  std::optional<int> flight_pitch_feedback_from_hop;
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory

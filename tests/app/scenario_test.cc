@@ -150,6 +150,23 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   ExpectError(Fill(fmt, "initial_hops='1.5'"), {"initial_hops", "integer"});
 }
 
+TEST_F(ScenarioTest, LearningFlightPitchFeedback) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  Scenario s = LoadScenario(
+      Write(Fill(fmt, "flight_pitch_feedback='0.5' flight_pitch_feedback_from_hop='12'")));
+  ASSERT_TRUE(s.learning.flight_pitch_feedback.has_value());
+  EXPECT_EQ(*s.learning.flight_pitch_feedback, 0.5);
+  ASSERT_TRUE(s.learning.flight_pitch_feedback_from_hop.has_value());
+  EXPECT_EQ(*s.learning.flight_pitch_feedback_from_hop, 12);
+  s = LoadScenario(Write(Fill(fmt, "c='0.1'")));
+  EXPECT_FALSE(s.learning.flight_pitch_feedback.has_value());
+  EXPECT_FALSE(s.learning.flight_pitch_feedback_from_hop.has_value());
+  ExpectError(Fill(fmt, "flight_pitch_feedback='1.5'"), {"flight_pitch_feedback", "[0, 1]"});
+  ExpectError(Fill(fmt, "flight_pitch_feedback='-0.1'"), {"flight_pitch_feedback", "[0, 1]"});
+  ExpectError(Fill(fmt, "flight_pitch_feedback_from_hop='2.5'"),
+              {"flight_pitch_feedback_from_hop", "integer"});
+}
+
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/>", {"s.xml", "malformed XML"});
   ExpectError("<scenario/>", {"<ddoc_scenario>"});

@@ -77,6 +77,16 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   EXPECT_EQ(HopperController::Create(model.get(), reversed, &error), nullptr);
   EXPECT_NE(error.find("duration"), std::string::npos) << error;
 
+  ControllerConfig bad_pitch;
+  bad_pitch.flight_pitch_feedback = 1.5;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
+  EXPECT_NE(error.find("flight_pitch_feedback must be in [0, 1], got 1.5"), std::string::npos)
+      << error;
+  bad_pitch.flight_pitch_feedback = 0.5;
+  bad_pitch.flight_pitch_feedback_from_hop = -1;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
+  EXPECT_NE(error.find("flight_pitch_feedback_from_hop must be >= 0"), std::string::npos) << error;
+
   ControllerConfig bad_model;
   bad_model.model.M = -1.0;
   EXPECT_EQ(HopperController::Create(model.get(), bad_model, &error), nullptr);
