@@ -156,21 +156,26 @@ void HopperController::Initialize() {
   phase_s_.setZero(config_.max_samples_per_mode);
 }
 
-void HopperController::Reset(const mjModel* m, mjData* d) {
+void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t) {
   mj_resetData(m, d);
+  d->time = t;
   VsaState vs;
-  WriteFlightState(map_, gait_.x0.data(), d, &vs);
+  WriteFlightState(map_, x, d, &vs);
   vsa_.Reset(vs);
-  d->time = 0.0;
   mode_ = hopper::kFlight;
+  started_ = false;  // the next step begins the hop (BeginHop) at this state
+  last_event_ = t;   // the state is a takeoff: the foot starts on the ground
+  have_prev_td_ = false;
+  stance_first_ = false;
+}
+
+void HopperController::Reset(const mjModel* m, mjData* d) {
+  PlaceAtTakeoff(m, d, gait_.x0.data(), 0.0);
   hop_ = 0;
-  started_ = false;
   failed_ = false;
   error_.clear();
   reports_.clear();
   nonfinite_steps_ = 0;
-  have_prev_td_ = false;
-  last_event_ = d->time;  // the reset state is a takeoff: the foot starts on the ground
   u_ = gait_.u0;
   frozen_ = false;
   learner_.reset();
@@ -187,17 +192,7 @@ void HopperController::RestartHop(const mjModel* m, mjData* d,
   if (!x.allFinite()) {
     throw InvalidArgument("HopperController::RestartHop: the start state is not finite");
   }
-  const double t = d->time;
-  mj_resetData(m, d);
-  d->time = t;
-  VsaState vs;
-  WriteFlightState(map_, x.data(), d, &vs);
-  vsa_.Reset(vs);
-  mode_ = hopper::kFlight;
-  started_ = false;  // the next step begins the hop (BeginHop) at this state
-  last_event_ = t;
-  have_prev_td_ = false;
-  stance_first_ = false;
+  PlaceAtTakeoff(m, d, x.data(), d->time);
   policy_->BeginTrial();
 }
 

@@ -285,6 +285,9 @@ class HopperController {
  private:
   HopperController(const mjModel* m, const ControllerConfig& config);
   void Initialize();                     // gait + OC-FB solve; throws
+  // mjData reset to the flight state x (model coordinates) at time t, treated as a takeoff: the
+  // next step begins a hop there. Shared by Reset and RestartHop.
+  void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void NewStep(const mjModel* m, mjData* d);
   void BeginHop(double t, const mjData* d);
   void EndHop();                         // takeoff: offline part for the next hop
