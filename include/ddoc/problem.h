@@ -5,22 +5,35 @@
 #ifndef DDOC_PROBLEM_H_
 #define DDOC_PROBLEM_H_
 
+#include <limits>
+
 #include "ddoc/switched_system.h"
 
 namespace ddoc {
 
-/// Input bounds (6) and per-mode duration bounds (7).
+/// Input bounds (6), per-mode duration bounds (7) and an optional box on the final time.
 ///
 ///   u_min <= u(t) <= u_max                                         (6)
 ///   duration_min(k) <= T_k - T_{k-1} <= duration_max(k),  T_{-1} = 0  (7)
+///   final_time_min <= T_{K-1} <= final_time_max
 ///
 /// Zero-based modes: T_k is the end of mode k, T_{K-1} the end of the trial.
-/// Equal lower and upper bounds are allowed (a fixed input or a fixed duration).
+/// Equal lower and upper bounds are allowed (a fixed input, a fixed duration, a fixed final time).
+/// Input bounds may be infinite (an unbounded input); with m = 0 they are empty.
 struct Bounds {
-  Vector u_min;         ///< m
-  Vector u_max;         ///< m
+  Vector u_min;         ///< m, entries in [-inf, inf), default none (set them)
+  Vector u_max;         ///< m, entries in (-inf, inf], >= u_min
   Vector duration_min;  ///< K, each > 0
   Vector duration_max;  ///< K, each >= duration_min, finite
+  double final_time_min = 0.0;  ///< s, lower bound on T_{K-1}; default 0 (none)
+  double final_time_max = std::numeric_limits<double>::infinity();  ///< s; default inf (none)
+
+  /// Fixes the final time: final_time_min = final_time_max = t_final (s).
+  void FixFinalTime(double t_final) { final_time_min = final_time_max = t_final; }
+  /// True when the final time is boxed (a finite upper or a positive lower bound).
+  bool final_time_bounded() const {
+    return final_time_min > 0.0 || final_time_max < std::numeric_limits<double>::infinity();
+  }
 };
 
 /// The problem (9)-(10). Non-owning: `system` and `cost` must outlive the Problem and every
@@ -33,8 +46,11 @@ struct Problem {
 
   /// Throws InvalidArgument naming the first problem found: null system/cost, K == 0,
   /// size mismatches (u bounds vs m, duration bounds and weights vs K), reversed bounds
-  /// (min > max), empty (size-0) bound vectors, non-finite entries, duration_min <= 0,
-  /// negative weights, or a positive weight on a mode without surface (s_k == 0).
+  /// (min > max), NaN bounds, u_min = +inf or u_max = -inf, non-finite duration bounds or
+  /// weights, duration_min <= 0, negative weights, a positive weight on a mode without surface
+  /// (s_k == 0), a final-time box that is reversed, negative or NaN, or one that the duration
+  /// bounds cannot meet (sum of duration_min > final_time_max or sum of duration_max <
+  /// final_time_min).
   void Validate() const;
 
   int num_modes() const { return system->num_modes(); }

@@ -83,7 +83,8 @@ class SwitchedSystem {
   bool GuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef hx) const;
 
  protected:
-  /// state_dims: n_k for each mode (non-empty, each > 0); input_dim: m > 0;
+  /// state_dims: n_k for each mode (non-empty, each > 0); input_dim: m >= 0 (0: no inputs,
+  /// pure switching-time optimization);
   /// surface_dims: s_k for each mode (empty means all zero).
   SwitchedSystem(std::vector<int> state_dims, int input_dim, std::vector<int> surface_dims = {},
                  bool has_cycle_reset = false);

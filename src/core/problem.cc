@@ -2,6 +2,7 @@
 #include "ddoc/problem.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace ddoc {
@@ -9,8 +10,10 @@ namespace {
 
 void Fail(const std::string& what) { throw InvalidArgument("Problem: " + what); }
 
-void CheckVector(const char* name, const Vector& v, Eigen::Index expected, const char* meaning) {
-  if (v.size() == 0) {
+// `infinite_ok`: +-inf entries are allowed (input bounds); NaN never is.
+void CheckVector(const char* name, const Vector& v, Eigen::Index expected, const char* meaning,
+                 bool infinite_ok = false) {
+  if (v.size() == 0 && expected > 0) {
     std::ostringstream os;
     os << name << " is empty, expected size " << expected << " (" << meaning << ")";
     Fail(os.str());
@@ -21,9 +24,9 @@ void CheckVector(const char* name, const Vector& v, Eigen::Index expected, const
     Fail(os.str());
   }
   for (Eigen::Index i = 0; i < v.size(); ++i) {
-    if (!std::isfinite(v(i))) {
+    if (std::isnan(v(i)) || (!infinite_ok && !std::isfinite(v(i)))) {
       std::ostringstream os;
-      os << name << "(" << i << ") = " << v(i) << " is not finite";
+      os << name << "(" << i << ") = " << v(i) << (infinite_ok ? " is NaN" : " is not finite");
       Fail(os.str());
     }
   }
@@ -37,12 +40,19 @@ void Problem::Validate() const {
   const int K = system->num_modes();
   const int m = system->input_dim();
   if (K == 0) Fail("empty mode sequence (K = 0)");
-  CheckVector("bounds.u_min", bounds.u_min, m, "m inputs");
-  CheckVector("bounds.u_max", bounds.u_max, m, "m inputs");
+  CheckVector("bounds.u_min", bounds.u_min, m, "m inputs", true);
+  CheckVector("bounds.u_max", bounds.u_max, m, "m inputs", true);
   CheckVector("bounds.duration_min", bounds.duration_min, K, "K modes");
   CheckVector("bounds.duration_max", bounds.duration_max, K, "K modes");
   CheckVector("surface_weights", surface_weights, K, "K modes");
   for (int i = 0; i < m; ++i) {
+    if (bounds.u_min(i) == std::numeric_limits<double>::infinity() ||
+        bounds.u_max(i) == -std::numeric_limits<double>::infinity()) {
+      std::ostringstream os;
+      os << "empty input box: u_min(" << i << ") = " << bounds.u_min(i) << ", u_max(" << i
+         << ") = " << bounds.u_max(i);
+      Fail(os.str());
+    }
     if (bounds.u_min(i) > bounds.u_max(i)) {
       std::ostringstream os;
       os << "reversed input bounds: u_min(" << i << ") = " << bounds.u_min(i) << " > u_max(" << i
@@ -73,6 +83,28 @@ void Problem::Validate() const {
          << " > 0 but mode " << k << " has no switching surface (s_k = 0)";
       Fail(os.str());
     }
+  }
+  const double tf_min = bounds.final_time_min, tf_max = bounds.final_time_max;
+  if (std::isnan(tf_min) || std::isnan(tf_max) || tf_min < 0 ||
+      tf_min == std::numeric_limits<double>::infinity()) {
+    std::ostringstream os;
+    os << "final-time bounds [" << tf_min << ", " << tf_max
+       << "]: expected 0 <= final_time_min < inf and final_time_max not NaN";
+    Fail(os.str());
+  }
+  if (tf_min > tf_max) {
+    std::ostringstream os;
+    os << "reversed final-time bounds: final_time_min = " << tf_min << " > final_time_max = "
+       << tf_max;
+    Fail(os.str());
+  }
+  const double sum_min = bounds.duration_min.sum(), sum_max = bounds.duration_max.sum();
+  if (sum_min > tf_max || sum_max < tf_min) {
+    std::ostringstream os;
+    os << "final-time bounds [" << tf_min << ", " << tf_max
+       << "] cannot be met by the duration bounds: their sums allow [" << sum_min << ", "
+       << sum_max << "]";
+    Fail(os.str());
   }
 }
 

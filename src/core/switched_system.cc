@@ -64,9 +64,9 @@ SwitchedSystem::SwitchedSystem(std::vector<int> state_dims, int input_dim,
       throw InvalidArgument(os.str());
     }
   }
-  if (input_dim_ <= 0) {
+  if (input_dim_ < 0) {
     std::ostringstream os;
-    os << "SwitchedSystem: input dimension m = " << input_dim_ << ", expected > 0";
+    os << "SwitchedSystem: input dimension m = " << input_dim_ << ", expected >= 0";
     throw InvalidArgument(os.str());
   }
   if (surface_dims_.empty()) surface_dims_.assign(state_dims_.size(), 0);

@@ -65,13 +65,34 @@ struct Base {
   }
 };
 
+// A one-mode system of state size 1 with a given input dimension (construction checks only).
+class WithInputDim : public SwitchedSystem {
+ public:
+  explicit WithInputDim(int m) : SwitchedSystem({1}, m) {}
+
+ protected:
+  void DoFlow(int, const ConstVectorRef&, const ConstVectorRef&, VectorRef xdot) const override {
+    xdot.setZero();
+  }
+  void DoFlowDerivatives(int, const ConstVectorRef&, const ConstVectorRef&, MatrixRef fx,
+                         MatrixRef fu) const override {
+    fx.setZero();
+    fu.setZero();
+  }
+  void DoReset(int, const ConstVectorRef& x, VectorRef x_next) const override { x_next = x; }
+  void DoResetDerivative(int, const ConstVectorRef&, MatrixRef gx) const override {
+    gx.setIdentity();
+  }
+};
+
 TEST(Validation, SwitchedSystemConstruction) {
   using LS = LinearSwitchedSystem;
   ExpectError([] { LS s({}, {Matrix::Ones(1, 1)}, {}); }, "empty mode sequence");
   ExpectError([] { LS s({Matrix::Zero(0, 0)}, {Matrix::Ones(0, 1)}, {Matrix::Zero(0, 0)}); },
               "state dimension n_0 = 0");
-  ExpectError([] { LS s({Matrix::Zero(2, 2)}, {Matrix::Ones(2, 0)}, {Matrix::Zero(2, 2)}); },
-              "input dimension m = 0");
+  ExpectError([] { WithInputDim s(-1); }, "input dimension m = -1, expected >= 0");
+  // m = 0 (pure switching-time optimization) is a valid system.
+  EXPECT_NO_THROW(LS({Matrix::Zero(2, 2)}, {Matrix::Ones(2, 0)}, {Matrix::Zero(2, 2)}));
 }
 
 TEST(Validation, SwitchedSystemCallsCheckSizesAndFiniteness) {
@@ -120,10 +141,23 @@ TEST(Validation, ProblemNamesEachProblem) {
   with([](Problem& p) { p.bounds.u_min(0) = 2; }, "reversed input bounds: u_min(0) = 2 > u_max(0)");
   with([](Problem& p) { p.bounds.duration_min(1) = 2; }, "reversed duration bounds: duration_min(1)");
   with([](Problem& p) { p.bounds.duration_min(0) = 0; }, "duration_min(0) = 0, expected > 0");
-  with([](Problem& p) { p.bounds.u_max(0) = kNaN; }, "bounds.u_max(0) = nan is not finite");
+  with([](Problem& p) { p.bounds.u_max(0) = kNaN; }, "bounds.u_max(0) = nan is NaN");
+  with([](Problem& p) { p.bounds.u_min(0) = kInf; }, "empty input box: u_min(0) = inf");
+  with([](Problem& p) { p.bounds.u_max(0) = -kInf; }, "empty input box: u_min(0) = -1, u_max(0) = -inf");
+  with([](Problem& p) { p.bounds.final_time_min = 3; p.bounds.final_time_max = 2; },
+       "reversed final-time bounds: final_time_min = 3 > final_time_max = 2");
+  with([](Problem& p) { p.bounds.final_time_min = -1; }, "final-time bounds [-1, inf]");
+  with([](Problem& p) { p.bounds.final_time_max = kNaN; }, "final_time_max not NaN");
+  with([](Problem& p) { p.bounds.FixFinalTime(100); },
+       "final-time bounds [100, 100] cannot be met by the duration bounds");
   with([](Problem& p) { p.bounds.duration_max(1) = kInf; }, "duration_max(1) = inf is not finite");
   with([](Problem& p) { p.surface_weights(0) = -1; }, "surface_weights(0) = -1");
   with([](Problem& p) { p.surface_weights(1) = 1; }, "has no switching surface");
+  // Unbounded inputs are valid.
+  Problem unbounded = b.problem;
+  unbounded.bounds.u_min(0) = -kInf;
+  unbounded.bounds.u_max(0) = kInf;
+  EXPECT_NO_THROW(unbounded.Validate());
 }
 
 TEST(Validation, TrajectoryNamesEachProblem) {
