@@ -19,5 +19,6 @@
 #include "ddoc/switching_time_update.h"
 #include "ddoc/time_normalization.h"
 #include "ddoc/trajectory.h"
+#include "ddoc/types.h"
 
 #endif  // DDOC_DDOC_H_

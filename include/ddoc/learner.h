@@ -63,6 +63,11 @@ struct LearnerSettings {
   BackwardPassSettings backward;         ///< (30)
   SwitchingTimeSettings switching;       ///< (31)
   OnlineControllerSettings controller;   ///< (33)-(34)
+
+  /// The `paper` preset: Algorithm 1 as printed (Lyapunov-type (30) with the previous control
+  /// variation driving p, alpha on all of (31) and (33), (36), the convergence test), with only
+  /// the L_z erratum of (30) fixed. What the reproduction runs.
+  static LearnerSettings Paper();
 };
 
 enum class LearnerStatus {

@@ -99,6 +99,10 @@ class OnlineController : public Policy {
   const Vector& last_du() const { return du_; }
   double last_tau() const { return last_tau_; }
   OnlineControllerSettings& settings() { return settings_; }
+  /// Replaces OnlineControllerSettings::state_feedback_scale (validated like Allocate: one
+  /// vector per mode of that mode's state size, entries finite and >= 0; empty = as printed).
+  /// Allocates; call between trials.
+  void SetStateFeedbackScale(const std::vector<Vector>& scale);
 
  private:
   // Finds j with tau_j <= tau <= tau_{j+1} in mode k; returns the interpolation weight.

@@ -7,27 +7,12 @@
 #ifndef DDOC_SWITCHED_SYSTEM_H_
 #define DDOC_SWITCHED_SYSTEM_H_
 
-#include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <Eigen/Dense>
+#include "ddoc/types.h"
 
 namespace ddoc {
-
-using Vector = Eigen::VectorXd;
-using Matrix = Eigen::MatrixXd;
-using ConstVectorRef = Eigen::Ref<const Eigen::VectorXd>;
-using VectorRef = Eigen::Ref<Eigen::VectorXd>;
-using ConstMatrixRef = Eigen::Ref<const Eigen::MatrixXd>;
-using MatrixRef = Eigen::Ref<Eigen::MatrixXd>;
-
-/// Thrown on invalid user input. The message names the offending quantity,
-/// its expected and actual value, e.g. "Flow(k=1): x has size 9, expected 10".
-class InvalidArgument : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
 
 /// A switched system with K modes visited in a fixed sequence (paper eq. (1)-(3)).
 ///

@@ -29,6 +29,14 @@ void InterpolateInput(const Trajectory& traj, int k, double tau, int* cursor, Ve
 
 }  // namespace
 
+LearnerSettings LearnerSettings::Paper() {
+  LearnerSettings s;
+  s.backward.equation = BackwardEquation::kLyapunov;
+  s.backward.use_previous_du = true;
+  s.controller.alpha_scales_feedback = true;
+  return s;
+}
+
 Learner::Learner(const Problem& problem, const LearnerSettings& settings)
     : problem_(&problem), settings_(settings) {
   problem.Validate();

@@ -83,6 +83,14 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   loaded_ = false;
 }
 
+void OnlineController::SetStateFeedbackScale(const std::vector<Vector>& scale) {
+  if (problem_ == nullptr) {
+    throw InvalidArgument("OnlineController::SetStateFeedbackScale: call Allocate first");
+  }
+  CheckStateFeedbackScale(scale, *problem_->system);
+  settings_.state_feedback_scale = scale;
+}
+
 void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass, double alpha,
                             const ConstVectorRef& dT) {
   if (problem_ == nullptr) throw InvalidArgument("OnlineController::Load: call Allocate first");
