@@ -34,6 +34,49 @@ double BoxQP::Objective(const ConstMatrixRef& H, const ConstVectorRef& g, const 
   return value;
 }
 
+bool BoxQP::FactorFree(const ConstMatrixRef& H, int nf) {
+  // Cholesky of H_FF (lower triangle, in place in chol_).
+  for (int a = 0; a < nf; ++a) {
+    for (int b = 0; b <= a; ++b) {
+      double s = H(free_[a], free_[b]);
+      for (int c = 0; c < b; ++c) s -= chol_(a, c) * chol_(b, c);
+      if (a == b) {
+        if (!(s > 0)) return false;
+        chol_(a, a) = std::sqrt(s);
+      } else {
+        chol_(a, b) = s / chol_(b, b);
+      }
+    }
+  }
+  return true;
+}
+
+bool BoxQP::ProjectedSearch(const ConstMatrixRef& H, const ConstVectorRef& g,
+                            const ConstVectorRef& lo, const ConstVectorRef& hi, double step,
+                            VectorRef x) {
+  // Armijo test along the projection clamp(x + s d) (Bertsekas 1982): sufficient decrease
+  // measured by the first-order change grad^T (x(s) - x).
+  const int n = static_cast<int>(g.size());
+  const double f0 = Objective(H, g, x.data(), n);
+  for (int ls = 0; ls < settings_.max_line_search_steps; ++ls) {
+    double decrease = 0;
+    bool moved = false;
+    for (int i = 0; i < n; ++i) {
+      trial_(i) = std::min(std::max(x(i) + step * direction_(i), lo(i)), hi(i));
+      decrease += grad_(i) * (trial_(i) - x(i));
+      moved = moved || trial_(i) != x(i);
+    }
+    if (!moved) return false;
+    const double f1 = Objective(H, g, trial_.data(), n);
+    if (decrease < 0 && f1 <= f0 + settings_.armijo * decrease) {
+      x = trial_.head(n);
+      return true;
+    }
+    step *= settings_.backtrack;
+  }
+  return false;
+}
+
 BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
                          const ConstVectorRef& lo, const ConstVectorRef& hi, VectorRef x) {
   const int n = static_cast<int>(g.size());
@@ -53,9 +96,15 @@ BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
     }
   }
   iterations_ = 0;
-  for (int i = 0; i < n; ++i) x(i) = std::min(std::max(x(i), lo(i)), hi(i));
+  kkt_ = 0;
+  for (int i = 0; i < n; ++i) {
+    x(i) = std::min(std::max(x(i), lo(i)), hi(i));
+    if (!std::isfinite(x(i))) x(i) = std::isfinite(lo(i)) ? lo(i) : (std::isfinite(hi(i)) ? hi(i) : 0.0);
+  }
   if (n == 0) return BoxQPStatus::kConverged;
   const double gscale = 1.0 + g.cwiseAbs().maxCoeff();
+  double hscale = 0;
+  for (int i = 0; i < n; ++i) hscale = std::max(hscale, std::abs(H(i, i)));
 
   Vector& grad = grad_;
   BoxQPStatus status = BoxQPStatus::kMaxIterations;
@@ -67,33 +116,29 @@ BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
       for (int j = 0; j < n; ++j) s += H(i, j) * x(j);
       grad(i) = s;
     }
-    // Projected gradient test and the free set.
-    double pg = 0;
-    int nf = 0;
+    // Projected-gradient (KKT) residual w = ||x - clamp(x - grad)||_inf.
+    double w = 0;
     for (int i = 0; i < n; ++i) {
       const double proj = std::min(std::max(x(i) - grad(i), lo(i)), hi(i));
-      pg = std::max(pg, std::abs(x(i) - proj));
-      const bool held = (x(i) <= lo(i) && grad(i) > 0) || (x(i) >= hi(i) && grad(i) < 0);
-      if (!held) free_[nf++] = i;
+      w = std::max(w, std::abs(x(i) - proj));
     }
-    if (pg <= settings_.tolerance * gscale) {
+    kkt_ = w;
+    if (w <= settings_.tolerance * gscale) {
       status = BoxQPStatus::kConverged;
       break;
     }
-    // Cholesky of H_FF (lower triangle, in place in chol_).
-    for (int a = 0; a < nf; ++a) {
-      for (int b = 0; b <= a; ++b) {
-        double s = H(free_[a], free_[b]);
-        for (int c = 0; c < b; ++c) s -= chol_(a, c) * chol_(b, c);
-        if (a == b) {
-          if (!(s > 0)) return BoxQPStatus::kNotPositiveDefinite;
-          chol_(a, a) = std::sqrt(s);
-        } else {
-          chol_(a, b) = s / chol_(b, b);
-        }
-      }
+    // The epsilon-active set (Bertsekas 1982): a variable within eps = min(w, eps_max) of a
+    // bound whose gradient pushes outward is held. A variable at a bound up to rounding (an
+    // offset of 1e-16 from a subtraction) is thereby held instead of blocking the Newton step.
+    int nf = 0;
+    for (int i = 0; i < n; ++i) {
+      const double eps = std::min(w, settings_.active_set_margin * (1.0 + std::abs(x(i))));
+      const bool held = (x(i) - lo(i) <= eps && grad(i) > 0) || (hi(i) - x(i) <= eps && grad(i) < 0);
+      if (!held) free_[nf++] = i;
     }
-    // Solve L L^T d_F = -grad_F.
+    if (!FactorFree(H, nf)) return BoxQPStatus::kNotPositiveDefinite;
+    // Solve L L^T d_F = -grad_F; held variables take a diagonally scaled gradient step, which
+    // the projection puts onto their bound.
     for (int a = 0; a < nf; ++a) {
       double s = -grad(free_[a]);
       for (int c = 0; c < a; ++c) s -= chol_(a, c) * rhs_(c);
@@ -104,31 +149,16 @@ BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
       for (int c = a + 1; c < nf; ++c) s -= chol_(c, a) * rhs_(c);
       rhs_(a) = s / chol_(a, a);
     }
-    direction_.head(n).setZero();
+    for (int i = 0; i < n; ++i) {
+      direction_(i) = -grad(i) / std::max(std::abs(H(i, i)), 1e-300 + 1e-12 * hscale);
+    }
     for (int a = 0; a < nf; ++a) direction_(free_[a]) = rhs_(a);
-
-    // Projected Armijo line search along clamp(x + s d).
-    const double f0 = Objective(H, g, x.data(), n);
-    double step = 1.0;
-    bool accepted = false;
-    for (int ls = 0; ls < settings_.max_line_search_steps; ++ls) {
-      double decrease = 0;
-      for (int i = 0; i < n; ++i) {
-        trial_(i) = std::min(std::max(x(i) + step * direction_(i), lo(i)), hi(i));
-        decrease += grad(i) * (trial_(i) - x(i));
-      }
-      const double f1 = Objective(H, g, trial_.data(), n);
-      if (f1 <= f0 + settings_.armijo * decrease) {
-        accepted = true;
-        break;
-      }
-      step *= settings_.backtrack;
-    }
-    if (!accepted) {
-      status = BoxQPStatus::kNoProgress;
-      break;
-    }
-    x = trial_.head(n);
+    if (ProjectedSearch(H, g, lo, hi, 1.0, x)) continue;
+    // Fallback: a projected steepest-descent step (step 1/max|H_ii| first).
+    for (int i = 0; i < n; ++i) direction_(i) = -grad(i);
+    if (ProjectedSearch(H, g, lo, hi, 1.0 / std::max(hscale, 1e-300), x)) continue;
+    status = BoxQPStatus::kNoProgress;
+    break;
   }
   return status;
 }

@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
 // BoxQP against the KKT conditions and against brute-force enumeration of active sets.
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -23,9 +24,10 @@ double KktResidual(const Matrix& H, const Vector& g, const Vector& lo, const Vec
   for (int i = 0; i < x.size(); ++i) {
     if (x(i) < lo(i) - 1e-14 || x(i) > hi(i) + 1e-14) return 1e300;  // infeasible
     double r;
-    if (x(i) <= lo(i)) {
+    // A bound counts as active within 1e-14 (rounding of the bounds themselves).
+    if (x(i) <= lo(i) + 1e-14) {
       r = std::max(0.0, -grad(i));
-    } else if (x(i) >= hi(i)) {
+    } else if (x(i) >= hi(i) - 1e-14) {
       r = std::max(0.0, grad(i));
     } else {
       r = std::abs(grad(i));
@@ -77,6 +79,60 @@ TEST(BoxQP, MatchesBruteForceAndKkt) {
   // Both regimes were exercised.
   EXPECT_GT(with_active, 50);
   EXPECT_GT(all_inactive, 20);
+}
+
+// Bounds that sit at the start point up to rounding (offsets of 1e-16, as a subtraction such as
+// duration_min - D leaves them) must be treated as bounds: the solver converges to the KKT point
+// instead of stopping with a zero step (the plain active set, which held a variable only when x
+// was exactly on its bound, stopped with kNoProgress at x = 0 here).
+TEST(BoxQP, BoundsAtTheStartUpToRoundingAreHeld) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  int pushed_out = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 2 + trial % 5;
+    Case c = RandomCase(&rng, n, 1.0);
+    // Every variable starts (x = 0) within +-1e-16 of one of its bounds.
+    for (int i = 0; i < n; ++i) {
+      const double offset = (trial + i) % 3 == 0 ? -1e-16 : ((trial + i) % 3 == 1 ? 1e-16 : 0.0);
+      if (normal(rng) > 0) {
+        c.lo(i) = offset;
+      } else {
+        c.hi(i) = offset;
+      }
+      if (c.lo(i) > c.hi(i)) std::swap(c.lo(i), c.hi(i));
+    }
+    BoxQP qp(8);
+    Vector x = Vector::Zero(n);
+    const BoxQPStatus status = qp.Solve(c.H, c.g, c.lo, c.hi, x);
+    ASSERT_EQ(status, BoxQPStatus::kConverged) << "trial " << trial << " kkt " << qp.kkt();
+    const Vector ref = testing::BruteForceBoxQp(c.H, c.g, c.lo, c.hi);
+    EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial;
+    EXPECT_LT(KktResidual(c.H, c.g, c.lo, c.hi, x), 1e-9) << "trial " << trial;
+    pushed_out += x.norm() > 1e-3;
+  }
+  EXPECT_GT(pushed_out, 100);
+}
+
+TEST(BoxQP, InfiniteBoundsAndZeroSize) {
+  Matrix H(2, 2);
+  H << 4, 1, 1, 3;
+  Vector g(2);
+  g << 1, -2;
+  const double inf = std::numeric_limits<double>::infinity();
+  Vector lo = Vector::Constant(2, -inf), hi = Vector::Constant(2, inf), x = Vector::Zero(2);
+  BoxQP qp(2);
+  ASSERT_EQ(qp.Solve(H, g, lo, hi, x), BoxQPStatus::kConverged);
+  EXPECT_LT((x + H.llt().solve(g)).norm(), 1e-12);
+  // One-sided: x_1 <= 0 active.
+  hi(1) = 0;
+  x.setZero();
+  ASSERT_EQ(qp.Solve(H, g, lo, hi, x), BoxQPStatus::kConverged);
+  EXPECT_EQ(x(1), 0.0);
+  EXPECT_NEAR(x(0), -0.25, 1e-12);
+  Vector empty;
+  Matrix H0(0, 0);
+  EXPECT_EQ(qp.Solve(H0, empty, empty, empty, empty), BoxQPStatus::kConverged);
 }
 
 TEST(BoxQP, UnconstrainedOptimumIsTheNewtonStep) {
