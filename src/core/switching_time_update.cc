@@ -3,10 +3,101 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 
 namespace ddoc {
+namespace {
+
+// Offsets within rounding of zero (a nominal duration on its bound) become exactly zero, so the
+// QP sees the variable on its bound.
+double Snap(double offset, double scale) {
+  return std::abs(offset) <= 1e-12 * std::max(1.0, scale) ? 0.0 : offset;
+}
+
+// Box QP with the multiplier nu of the sum constraint folded into the linear term.
+double SolveShifted(BoxQP* qp, const Matrix& H, const Vector& g, double nu, const Vector& lo,
+                    const Vector& hi, Vector* x) {
+  const Vector shifted = g + Vector::Constant(g.size(), nu);
+  qp->Solve(H, shifted, lo, hi, *x);
+  return x->sum();
+}
+
+}  // namespace
+
+BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi,
+                            double sum_lo, double sum_hi, Vector* x) {
+  const int K = static_cast<int>(g.size());
+  BoxQP qp(K);
+  x->setZero(K);
+  BoxQPStatus status = qp.Solve(H, g, lo, hi, *x);
+  const double sum0 = x->sum();
+  const double scale = 1.0 + lo.cwiseAbs().cwiseMin(hi.cwiseAbs()).sum() + x->cwiseAbs().sum();
+  const double tol = 1e-13 * scale;
+  if (sum0 >= sum_lo - tol && sum0 <= sum_hi + tol) return status;
+  // The sum constraint is active at s: 1^T x(nu) is non-increasing in the multiplier nu of
+  // min 1/2 x^T H x + (g + nu 1)^T x over the box, so bisect for 1^T x(nu) = s.
+  const double s = sum0 > sum_hi ? sum_hi : sum_lo;
+  const double sign = sum0 > sum_hi ? 1.0 : -1.0;
+  double a = 0.0, b = sign * std::max(1.0, g.cwiseAbs().maxCoeff());
+  Vector xb(K);
+  xb = *x;
+  for (int i = 0; i < 200 && sign * (SolveShifted(&qp, H, g, b, lo, hi, &xb) - s) > 0; ++i) {
+    a = b;
+    b *= 2.0;
+  }
+  Vector xm = xb;
+  for (int i = 0; i < 200 && std::abs(b - a) > 1e-15 * std::max(1.0, std::abs(b)); ++i) {
+    const double mid = 0.5 * (a + b);
+    if (sign * (SolveShifted(&qp, H, g, mid, lo, hi, &xm) - s) > 0) {
+      a = mid;
+    } else {
+      b = mid;
+      xb = xm;
+    }
+  }
+  *x = xb;
+  // Polish: with the active set of the bisection, solve the equality-constrained KKT system
+  //   [H_FF 1; 1^T 0] [x_F; nu] = [-g_F - H_FC x_C; s - 1^T x_C]
+  // exactly, and keep it when it is feasible.
+  std::vector<int> free;
+  for (int k = 0; k < K; ++k) {
+    const double w = 1e-12 * std::max(1.0, std::abs((*x)(k)));
+    if ((*x)(k) > lo(k) + w && (*x)(k) < hi(k) - w) free.push_back(k);
+  }
+  const int nf = static_cast<int>(free.size());
+  if (nf > 0) {
+    Matrix kkt = Matrix::Zero(nf + 1, nf + 1);
+    Vector rhs(nf + 1);
+    double fixed_sum = 0;
+    for (int k = 0; k < K; ++k) {
+      if (std::find(free.begin(), free.end(), k) == free.end()) fixed_sum += (*x)(k);
+    }
+    for (int a_i = 0; a_i < nf; ++a_i) {
+      const int i = free[a_i];
+      double r = -g(i);
+      for (int k = 0; k < K; ++k) {
+        if (std::find(free.begin(), free.end(), k) == free.end()) r -= H(i, k) * (*x)(k);
+      }
+      rhs(a_i) = r;
+      for (int b_i = 0; b_i < nf; ++b_i) kkt(a_i, b_i) = H(i, free[b_i]);
+      kkt(a_i, nf) = kkt(nf, a_i) = 1.0;
+    }
+    rhs(nf) = s - fixed_sum;
+    const Vector sol = kkt.fullPivLu().solve(rhs);
+    bool feasible = sol.allFinite();
+    for (int a_i = 0; a_i < nf && feasible; ++a_i) {
+      const int i = free[a_i];
+      feasible = sol(a_i) >= lo(i) && sol(a_i) <= hi(i);
+    }
+    if (feasible) {
+      for (int a_i = 0; a_i < nf; ++a_i) (*x)(free[a_i]) = sol(a_i);
+    }
+  }
+  status = BoxQPStatus::kConverged;
+  return status;
+}
 
 SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVectorRef& T_nominal,
                                            const ConstMatrixRef& P22, const ConstVectorRef& p2,
@@ -29,7 +120,7 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   Vector D(K);
   for (int k = 0; k < K; ++k) D(k) = T_nominal(k) - (k == 0 ? 0.0 : T_nominal(k - 1));
   Matrix H = S.transpose() * (0.5 * (P22 + P22.transpose())) * S;
-  Vector g = alpha * (S.transpose() * p2);
+  const Vector gD = S.transpose() * p2;
   // Levenberg-Marquardt-type modification of the spectrum: eigenvalues below the floor are
   // replaced by max(|lambda|, floor) (negative curvature mirrored, zero curvature floored), so
   // the step keeps scaling with alpha and stays a descent direction.
@@ -49,9 +140,10 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
     H = eig.eigenvectors() * modified.asDiagonal() * eig.eigenvectors().transpose();
     H = 0.5 * (H + H.transpose());
   }
-  Vector lo = problem.bounds.duration_min - D;
-  Vector hi = problem.bounds.duration_max - D;
+  Vector lo(K), hi(K);
   for (int k = 0; k < K; ++k) {
+    lo(k) = Snap(problem.bounds.duration_min(k) - D(k), D(k));
+    hi(k) = Snap(problem.bounds.duration_max(k) - D(k), D(k));
     // A measured nominal may violate (7); the box then moves the plan back inside. The
     // optional step cap must not empty the box: then the bound nearest to 0 wins.
     const double l = std::max(lo(k), -settings.max_duration_step);
@@ -63,11 +155,17 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
       lo(k) = hi(k) = (hi(k) < 0 ? hi(k) : lo(k));
     }
   }
-  BoxQP qp(K);
-  Vector dD = Vector::Zero(K);
-  out.status = qp.Solve(H, g, lo, hi, dD);
+  // The final-time box on T_{K-1} = sum of durations.
+  const double TK = T_nominal(K - 1);
+  const double sum_lo = Snap(problem.bounds.final_time_min - TK, TK);
+  const double sum_hi = problem.bounds.final_time_max == std::numeric_limits<double>::infinity()
+                            ? std::numeric_limits<double>::infinity()
+                            : Snap(problem.bounds.final_time_max - TK, TK);
+  Vector dD(K);
+  out.status = SolveDurationQp(H, alpha * gD, lo, hi, sum_lo, sum_hi, &dD);
   out.dT = S * dD;
   out.T_planned = T_nominal + out.dT;
+  out.model_change = 0.5 * dD.dot(H * dD) + gD.dot(dD);
   return out;
 }
 

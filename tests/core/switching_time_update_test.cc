@@ -1,0 +1,179 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The switching-time update (31): the duration QP with the final-time (sum) constraint against
+// brute-force enumeration of active sets, bounds that the nominal sits on up to rounding, and a
+// fixed final time through SolveSwitchingTimeUpdate.
+#include <limits>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ddoc/switching_time_update.h"
+#include "test_systems.h"
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// min 1/2 x'Hx + g'x, lo <= x <= hi, s_lo <= 1'x <= s_hi by enumerating, for every variable,
+// {lower, upper, free} and for the sum {inactive, at s_lo, at s_hi}, solving the KKT system of
+// each assignment and keeping the feasible point with the lowest objective (an independent
+// reference; 3^(n+1) systems, so small n only).
+Vector BruteForce(const Matrix& H, const Vector& g, const Vector& lo, const Vector& hi,
+                  double s_lo, double s_hi) {
+  const int n = static_cast<int>(g.size());
+  int combos = 1;
+  for (int i = 0; i < n; ++i) combos *= 3;
+  Vector best;
+  double best_value = kInf;
+  for (int sum_mode = 0; sum_mode < 3; ++sum_mode) {
+    if (sum_mode == 1 && !std::isfinite(s_lo)) continue;
+    if (sum_mode == 2 && !std::isfinite(s_hi)) continue;
+    for (int c = 0; c < combos; ++c) {
+      Vector x = Vector::Zero(n);
+      std::vector<int> fr;
+      int code = c;
+      bool ok = true;
+      for (int i = 0; i < n; ++i, code /= 3) {
+        if (code % 3 == 0) {
+          if (!std::isfinite(lo(i))) ok = false;
+          x(i) = lo(i);
+        } else if (code % 3 == 1) {
+          if (!std::isfinite(hi(i))) ok = false;
+          x(i) = hi(i);
+        } else {
+          fr.push_back(i);
+        }
+      }
+      if (!ok) continue;
+      const int nf = static_cast<int>(fr.size());
+      const int rows = nf + (sum_mode > 0 ? 1 : 0);
+      if (rows > 0) {
+        Matrix A = Matrix::Zero(rows, rows);
+        Vector b = Vector::Zero(rows);
+        for (int a = 0; a < nf; ++a) {
+          b(a) = -g(fr[a]);
+          for (int i = 0; i < n; ++i) {
+            if (std::find(fr.begin(), fr.end(), i) == fr.end()) b(a) -= H(fr[a], i) * x(i);
+          }
+          for (int bb = 0; bb < nf; ++bb) A(a, bb) = H(fr[a], fr[bb]);
+          if (sum_mode > 0) A(a, nf) = A(nf, a) = 1.0;
+        }
+        if (sum_mode > 0) {
+          double fixed = 0;
+          for (int i = 0; i < n; ++i) {
+            if (std::find(fr.begin(), fr.end(), i) == fr.end()) fixed += x(i);
+          }
+          b(nf) = (sum_mode == 1 ? s_lo : s_hi) - fixed;
+        }
+        Eigen::FullPivLU<Matrix> lu(A);
+        if (lu.rank() < rows) continue;
+        const Vector sol = lu.solve(b);
+        for (int a = 0; a < nf; ++a) x(fr[a]) = sol(a);
+      }
+      bool feasible = true;
+      for (int i = 0; i < n; ++i) feasible &= x(i) >= lo(i) - 1e-10 && x(i) <= hi(i) + 1e-10;
+      feasible &= x.sum() >= s_lo - 1e-10 && x.sum() <= s_hi + 1e-10;
+      const double value = 0.5 * x.dot(H * x) + g.dot(x);
+      if (feasible && value < best_value - 1e-14) {
+        best_value = value;
+        best = x;
+      }
+    }
+  }
+  return best;
+}
+
+TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
+  std::mt19937 rng(21);
+  std::normal_distribution<double> normal;
+  int sum_active = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = 1 + trial % 5;
+    Matrix M(n, n);
+    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(rng);
+    const Matrix H = M * M.transpose() + 0.2 * Matrix::Identity(n, n);
+    Vector g(n), lo(n), hi(n);
+    for (int i = 0; i < n; ++i) {
+      g(i) = 2.0 * normal(rng);
+      lo(i) = -0.2 - std::abs(normal(rng));
+      hi(i) = 0.2 + std::abs(normal(rng));
+      if (trial % 7 == 0) hi(i) = kInf;  // one-sided boxes too
+    }
+    // A sum box that is sometimes an equality (a fixed final time: here 1^T dD = 0).
+    double s_lo = -0.3 * std::abs(normal(rng)), s_hi = 0.3 * std::abs(normal(rng));
+    if (trial % 3 == 0) s_lo = s_hi = 0.0;
+    if (trial % 5 == 4) s_hi = kInf;
+    Vector x;
+    SolveDurationQp(H, g, lo, hi, s_lo, s_hi, &x);
+    const Vector ref = BruteForce(H, g, lo, hi, s_lo, s_hi);
+    ASSERT_EQ(ref.size(), n) << "trial " << trial;
+    EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial;
+    EXPECT_GE(x.sum(), s_lo - 1e-12);
+    EXPECT_LE(x.sum(), s_hi + 1e-12);
+    for (int i = 0; i < n; ++i) {
+      EXPECT_GE(x(i), lo(i) - 1e-15);
+      EXPECT_LE(x(i), hi(i) + 1e-15);
+    }
+    if (std::abs(x.sum() - s_lo) < 1e-9 || std::abs(x.sum() - s_hi) < 1e-9) ++sum_active;
+  }
+  EXPECT_GT(sum_active, 100);
+}
+
+// Two modes, durations in [0.1, 1], a problem for the checks below.
+struct TwoModes {
+  LinearSwitchedSystem sys{{Matrix::Zero(1, 1), Matrix::Zero(1, 1)},
+                           {Matrix::Ones(1, 1), Matrix::Ones(1, 1)},
+                           {Matrix::Identity(1, 1), Matrix::Identity(1, 1)}};
+  QuadraticCost cost{{Matrix::Identity(1, 1), Matrix::Identity(1, 1)},
+                     {Matrix::Identity(1, 1), Matrix::Identity(1, 1)},
+                     {0, 0},
+                     {Matrix::Identity(1, 1), Matrix::Identity(1, 1)},
+                     {Vector::Zero(1), Vector::Zero(1)}};
+  Problem problem;
+  TwoModes() {
+    problem.system = &sys;
+    problem.cost = &cost;
+    problem.bounds.u_min = Vector::Constant(1, -1);
+    problem.bounds.u_max = Vector::Constant(1, 1);
+    problem.bounds.duration_min = Vector::Constant(2, 0.1);
+    problem.bounds.duration_max = Vector::Constant(2, 1.0);
+    problem.surface_weights = Vector::Zero(2);
+  }
+};
+
+TEST(SwitchingTimeUpdate, FixedFinalTimeMovesOnlyTheSwitch) {
+  TwoModes t;
+  t.problem.bounds.FixFinalTime(1.2);
+  Matrix P22(2, 2);
+  P22 << 3, 1, 1, 2;
+  const Eigen::Vector2d T(0.5, 1.2), p2(0.4, -0.7);
+  const SwitchingTimeStep step = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0);
+  EXPECT_EQ(step.T_planned(1), 1.2);  // exactly the final time
+  // With T_1 fixed the problem is 1-D in T_0: dT_0 = -p2_0 / P22_00.
+  EXPECT_NEAR(step.dT(0), -0.4 / 3.0, 1e-12);
+  EXPECT_NEAR(step.model_change, 0.5 * 3.0 * step.dT(0) * step.dT(0) + 0.4 * step.dT(0), 1e-12);
+}
+
+TEST(SwitchingTimeUpdate, ANominalOnItsBoundUpToRoundingIsOnIt) {
+  TwoModes t;
+  // D_0 = 0.1 + 1e-17-ish from the subtraction 0.30000000000000004 - 0.2: on its lower bound.
+  const double T0 = 0.1 + 1e-16;
+  const Eigen::Vector2d T(T0, T0 + 0.5);
+  Matrix P22(2, 2);
+  P22 << 2, 0.5, 0.5, 1;
+  // The gradient pushes D_0 below its bound and wants D_1 longer: D_0 stays on the bound and
+  // the whole step goes into D_1 (box on durations, S^T p2 = (p2_0 + p2_1, p2_1)).
+  const Eigen::Vector2d p2(0.3, -0.4);
+  const SwitchingTimeStep step = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0);
+  EXPECT_EQ(step.status, BoxQPStatus::kConverged);
+  const double D0 = step.T_planned(0), D1 = step.T_planned(1) - step.T_planned(0);
+  EXPECT_NEAR(D0, 0.1, 1e-15);
+  EXPECT_GT(D1, 0.5 + 1e-3);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
