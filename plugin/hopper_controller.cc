@@ -47,16 +47,19 @@ void ControlCallback(const mjModel* m, mjData* d) {
 }  // namespace
 
 LearnerSettings HopperLearnerDefaults() {
-  LearnerSettings s;
+  LearnerSettings s;  // the default preset: kRiccati, alpha on the feed-forward only
+  s.acceptance = Acceptance::kSufficientDecrease;
+  s.interpolate_backtracking = false;
+  s.step_convergence = true;
   s.c = 1e-7;
   s.gamma = 0.5;
   s.reset_alpha_on_accept = false;
-  s.controller.alpha_scales_feedback = false;
-  s.controller.regularization = 0.01;
-  s.backward.equation = BackwardEquation::kRiccati;
+  s.regularization_min = 0.01;
+  s.backward.integrator = BackwardIntegrator::kRk4;
   s.backward.psd_switching_hessians = true;
+  s.backward.box_aware = false;
+  s.backward.time_curvature = false;
   s.alpha_initial = 0.1;
-  s.backward.riccati_regularization = s.controller.regularization;
   return s;
 }
 
@@ -123,12 +126,6 @@ void HopperController::Initialize() {
                           std::to_string(c.max_samples_per_mode));
   }
   problem_.Validate();  // duration bounds: reversed or non-positive -> named error
-  if (c.sync_riccati_regularization) {
-    for (LearnerSettings* ls : {&config_.learner, &config_.model_learner}) {
-      ls->backward.riccati_regularization = ls->controller.regularization;
-      ls->backward.regularization_scaling = ls->controller.regularization_scaling;
-    }
-  }
 
   model_plant_.settings().dt = c.dt_model;
   model_plant_.set_guard([this](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
@@ -478,11 +475,9 @@ void HopperController::EndHop() {
 
 void HopperController::SetPitchFeedback() {
   if (pitch_scale_.empty() || runs_initial_law()) return;  // u^0 keeps its feedback
-  std::vector<Vector>& scale = policy_->settings().state_feedback_scale;
-  if (hop_ + 1 >= config_.flight_pitch_feedback_from_hop) {
-    if (scale.empty()) scale = pitch_scale_;  // the learner's two slots: once each
-  } else if (!scale.empty()) {
-    scale.clear();
+  const bool scaled = hop_ + 1 >= config_.flight_pitch_feedback_from_hop;
+  if (scaled != !policy_->settings().state_feedback_scale.empty()) {
+    policy_->SetStateFeedbackScale(scaled ? pitch_scale_ : std::vector<Vector>{});
   }
 }
 

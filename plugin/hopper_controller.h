@@ -107,10 +107,6 @@ struct ControllerConfig {
   /// 1.1504 while the law's steady cycle costs 1.1596, and no later hop ever passes (36)
   /// against hop 0. >= 1.
   int initial_hops = 3;
-  /// true: Create sets backward.riccati_regularization = controller.regularization (and
-  /// backward.regularization_scaling = controller.regularization_scaling) in both learners, so that the Riccati gain and the controller's H = L_uu + mu I agree even when
-  /// only the controller's regularization is overridden (e.g. a scenario's <learning>).
-  bool sync_riccati_regularization = true;
   /// How the controller's normalized time tau of (12) is computed on the robot (the recorded
   /// trajectory keeps the measured clock either way):
   ///   false (the paper, Policy::NormalizedTime): tau = k + clamp(t_in_mode / D_k, 0, 1);

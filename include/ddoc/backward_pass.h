@@ -5,138 +5,104 @@
 #ifndef DDOC_BACKWARD_PASS_H_
 #define DDOC_BACKWARD_PASS_H_
 
-#include <memory>
 #include <vector>
 
+#include "ddoc/box_qp.h"
 #include "ddoc/problem.h"
-#include "ddoc/time_normalization.h"
 #include "ddoc/trajectory.h"
 
 namespace ddoc {
 
-/// Integration scheme between two samples (coefficients interpolated linearly in tau).
-enum class BackwardIntegrator {
-  kRk4,      ///< classical RK4, 4 products P*F_z per interval, local error O(h^5)
-  kMidpoint  ///< explicit midpoint (RK2), 2 products per interval, local error O(h^3)
-};
-
-/// Which equation P and p follow.
+/// Which equations P and p follow (docs/engine.md derives both).
 enum class BackwardEquation {
-  /// The paper's (30): Lyapunov-type, no quadratic term; p is the adjoint (plus du_prev).
+  /// The paper's (30): Lyapunov-type P (no quadratic term), p the adjoint of the linearized
+  /// cost (plus the previous control variation with use_previous_du). Pairs with alpha on all
+  /// of b in (33).
   kLyapunov,
-  /// Extension (not the paper): P gets the Riccati term of the closed-loop cost-to-go,
-  ///   dP/dtau = -(P F_z + F_z^T P + L_zz - (P F_u + L_zu) H^{-1} (F_u^T P + L_uz)),
-  /// H = L_uu + mu I, so the feedback H^{-1}(L_uz + F_u^T P) of (33) is the (unconstrained)
-  /// LQR gain of the linearization; p stays the gradient adjoint of (30) (feed-forward =
-  /// preconditioned gradient step).
-  kRiccatiFeedback,
-  /// Extension (not the paper): the Riccati equations of the unconstrained LQ sub-problem (21),
-  /// i.e. (30) with the feedback of (33) substituted into the co-state equation:
-  ///   P as kRiccatiFeedback,
-  ///   dp/dtau = -(F_z^T p + L_z - (P F_u + L_zu) H^{-1} (L_u + F_u^T p)).
-  /// Then (33) with alpha = 1 is a Newton (iLQR-type) step in u and (31) uses the reduced
-  /// Hessian/gradient of the cost w.r.t. T. Input bounds are ignored in P and p.
-  kRiccati
+  /// The recommended default: the Riccati equations of the box-constrained LQ sub-problem (21)
+  /// (box-constrained DDP in continuous time). On each sample interval the full step
+  /// k = argmin_{u_min <= u + k <= u_max} 1/2 k^T H k + k^T (L_u + F_u^T p) fixes the free set F;
+  ///   dP/dtau = -(P F_z + F_z^T P + L_zz - M_F H_FF^{-1} M_F^T),   M = P F_u + L_zu,
+  ///   dp/dtau = -(F_z^T p + L_z + M k),
+  /// so clamped inputs get no feedback and (33) with alpha = 1 is a Newton step in u, and (31)
+  /// is a Newton step in T on the reduced Hessian P22(0). Pairs with alpha on the feed-forward
+  /// only.
+  kRiccati,
 };
 
-/// How the regularization mu of H = L_uu + diag(mu) is formed, in (33) (OnlineController) and
-/// in the Riccati variants of the backward pass. reg is the settings' regularization.
-enum class RegularizationScaling {
-  /// One scalar for every input: mu_i = reg (1 + max_j |L_uu,jj|). The "1" is in raw input
-  /// units, so an input with a small curvature (e.g. a stiffness command in N/m whose R weight
-  /// is 1e-6) gets a mu many orders above its own L_uu,ii.
-  kScalar,
-  /// Per input, in normalized input units v_i = u_i / s_i with s_i = u_max_i - u_min_i:
-  ///   mu_i = reg (|L_uu,ii| + s_i^-2),
-  /// i.e. Marquardt's scaling by the input's own curvature plus a floor reg that is the same for
-  /// every input once measured in fractions of its range (s_i = 1 where the range is 0 or not
-  /// finite). Invariant to rescaling an input's units (with its bounds).
-  kPerInput
+/// Integration scheme on each sample interval (coefficients constant on the interval).
+enum class BackwardIntegrator {
+  kMidpoint,  ///< explicit midpoint (2 stages), second order like the coefficients' quadrature
+  kRk4        ///< classical RK4 (4 stages), for stiff Riccati equations
 };
 
-/// mu (m) of H = L_uu + diag(mu) for the given scaling; inv_range_sq (m) holds s_i^-2 (see
-/// InverseSquaredInputRanges). Does not allocate.
-void RegularizationDiagonal(RegularizationScaling scaling, double reg, const ConstMatrixRef& luu,
-                            const ConstVectorRef& inv_range_sq, VectorRef mu);
-
-/// s_i^-2 of RegularizationScaling::kPerInput: (u_max_i - u_min_i)^-2, 1 where the range is 0
-/// or not finite. Allocates (call at setup).
-Vector InverseSquaredInputRanges(const Bounds& bounds);
-
-/// Settings of BackwardPass.
+/// Settings of BackwardPass. Presets: LearnerSettings{} (kRiccati, time_curvature) and
+/// LearnerSettings::Paper() (kLyapunov, use_previous_du).
 struct BackwardPassSettings {
-  /// The equation for P, p (default: the paper's Lyapunov-type (30)).
-  BackwardEquation equation = BackwardEquation::kLyapunov;
-  /// Legacy switch: true upgrades kLyapunov to kRiccatiFeedback (same as setting `equation`).
-  bool riccati = false;
-  /// Riccati variants: H = L_uu + mu I, mu = riccati_regularization * (1 + max|diag L_uu|).
-  /// Use the same value as OnlineControllerSettings::regularization so that the gain the
-  /// controller applies is the gain the Riccati equation assumed. >= 0.
-  double riccati_regularization = 0.1;
-  /// Riccati variants: how mu is formed from riccati_regularization (default kScalar, the
-  /// formula above; kPerInput: mu_i = reg (|L_uu,ii| + (u_max_i - u_min_i)^-2)). Use the same
-  /// value as OnlineControllerSettings::regularization_scaling.
-  RegularizationScaling regularization_scaling = RegularizationScaling::kScalar;
-  /// Option (default false = the exact Hessians): replace each switching-cost Hessian Phi_{k,zz}
-  /// by its projection onto the positive semidefinite cone (negative eigenvalues set to 0)
-  /// before it enters P. With a large terminal residual the exact Hessian of a squared
-  /// residual through a nonlinear map is indefinite, and a Riccati variant can then escape to
-  /// infinity inside the mode (measured on the MuJoCo hopper: non-finite P22 after a hop with
-  /// I1 ~ 20). Allocates (an eigen-decomposition per switch) when enabled.
-  bool psd_switching_hessians = false;
-  /// Include the paper's driving term (P F_u + L_zu) du^{i-1} in the p-equation of (30)
-  /// (kLyapunov and kRiccatiFeedback only).
-  /// false (default): p is the exact adjoint of the linearized cost, so L_u + F_u^T p is the
-  /// gradient of the cost w.r.t. u(tau) and p_2(0) the gradient w.r.t. T.
+  BackwardEquation equation = BackwardEquation::kRiccati;  ///< default kRiccati
+  BackwardIntegrator integrator = BackwardIntegrator::kMidpoint;  ///< default midpoint
+  /// kRiccati: the free set of each interval's full step enters P and p (clamped inputs get no
+  /// feedback; default true). false: the unconstrained Riccati equations (the bounds act only in
+  /// the online QP of (33)), which the hopper's learner keeps (docs/experiments.md).
+  bool box_aware = true;
+  /// Exact second-order terms of the time normalization in the Hamiltonian: the curvature
+  /// p_x^T d^2 F / (dT dx) = +-p_x^T f_x and p_x^T d^2 F / (dT du) = +-p_x^T f_u (the sign of
+  /// D_k's dependence on T_k, T_{k-1}) added to L_zT and L_uT. They need no second derivative
+  /// of f and make P22(0) the exact Hessian w.r.t. T of the LQ model. Default true.
+  bool time_curvature = true;
+  /// The printed (30)'s driving term (P F_u + L_zu) du^{i-1} in the p-equation (kLyapunov
+  /// only; then p is not the gradient adjoint). Default false; the paper preset sets it.
   bool use_previous_du = false;
-  /// Integration scheme (default RK4).
-  BackwardIntegrator integrator = BackwardIntegrator::kRk4;
-  /// Cyclic (periodic) value, NOT in the paper. 0 (default): the problem ends at T_K, as in
-  /// (2). gamma_c in (0, 1]: for a system with a cycle reset g_{K-1} (mode K-1 -> mode 0, e.g.
-  /// a hopper's takeoff), the terminal condition also values the NEXT cycle:
-  ///   P(K) = Phi_{K,zz} + gamma_c G^T P_0 G   (state block; G = dg_{K-1}/dx at x(T_K)),
-  /// where P_0 is the state block of P at tau = 0. Run sweeps the pass until P_0 is a fixed
-  /// point (the periodic Riccati solution on the nominal), warm-started from the previous Run.
-  /// Only P changes at the terminal (p(K) = Phi_{K,z}): the gains see the consequences of a
-  /// deviation in all later cycles instead of only in this one; the feed-forward still
-  /// descends this cycle's cost. Riccati variants only (kLyapunov ignores it).
+  /// Replace each switching-cost Hessian Phi_{k,zz} by its projection onto the positive
+  /// semidefinite cone before it enters P (allocates an eigen-decomposition per switch).
+  /// Default false.
+  bool psd_switching_hessians = false;
+  /// Cyclic (periodic) value gamma_c in [0, 1], NOT in the paper, kRiccati only. 0 (default):
+  /// the problem ends at T_K. > 0, for a system with a cycle reset g_{K-1}:
+  /// P_xx(K) = Phi_xx + gamma_c G^T P_0 G (G = dg_{K-1}/dx at the end of the nominal, P_0 the
+  /// state block of P(0)), swept to a fixed point (at most cyclic_max_sweeps sweeps, relative
+  /// change cyclic_tolerance), warm-started from the previous Run.
   double cyclic_value = 0.0;
-  /// Most sweeps per Run for the cyclic value, and the relative change of P_0 (Frobenius) at
-  /// which the sweeps stop.
-  int cyclic_max_sweeps = 30;
-  double cyclic_tolerance = 1e-4;
-  /// Event-terminated horizon, NOT in the paper (default false: the paper's terminal
-  /// condition P(K) = Phi_{K,zz}, p(K) = Phi_{K,z}). On a plant whose last mode ends at a
-  /// state event (a hopper's takeoff) the terminal cost is measured AT the event, so a
-  /// deviation along the flow f_{K-1} at the end only moves the event and changes nothing.
-  /// With this option, when the system provides SwitchedSystem::GuardGradient for the last
-  /// mode, the terminal cost (and the cycle reset of cyclic_value) is taken through
-  ///   Pi = I - f gamma_x^T / (gamma_x^T f)      at the nominal's last sample,
-  /// i.e. P(K) = Pi^T Phi_{K,xx} Pi, p(K) = Pi^T Phi_{K,x} - l gamma_x / (gamma_x^T f) (state
-  /// blocks; the last term is the running cost l of the time the event gains). Intermediate
-  /// switches keep the paper's G_{k,x}: there T_k is a decision variable tied to the event by
-  /// the surface penalty (8), whose gradient the projection would remove.
+  int cyclic_max_sweeps = 30;      ///< default 30
+  double cyclic_tolerance = 1e-4;  ///< default 1e-4
+  /// Event-terminated horizon, NOT in the paper (default false): with
+  /// SwitchedSystem::GuardGradient gamma_x for the last mode, the terminal condition is taken
+  /// through the event, Pi = I - f gamma_x^T / (gamma_x^T f):
+  /// P_xx(K) = Pi^T Phi_xx Pi, p_x(K) = Pi^T Phi_x - l gamma_x / (gamma_x^T f).
   bool terminal_event = false;
+};
+
+/// Why a Run did not produce usable results.
+enum class BackwardStatus {
+  kOk = 0,
+  kNotPositiveDefinite,  ///< H = L_uu + mu I (on the free set) was not positive definite
+  kNonFinite,            ///< P or p became non-finite (raise the regularization)
 };
 
 /// The backward pass (30), derived from (26)-(29) with delta-lambda = P delta-z + p:
 ///
-///   dP/dtau = -(P F_z + F_z^T P + L_zz),                                P(K) = Phi_{K,zz}
-///   dp/dtau = -(F_z^T p + L_z + (P F_u + L_zu) du_prev),                 p(K) = Phi_{K,z}
+///   dP/dtau = -(P F_z + F_z^T P + L_zz)             [- M_F H_FF^{-1} M_F^T, kRiccati]
+///   dp/dtau = -(F_z^T p + L_z)                      [- M k, kRiccati]
 ///   P^-(k)  = Phi_{k,zz} + G_{k,z}^T P^+(k) G_{k,z},   p^-(k) = Phi_{k,z} + G_{k,z}^T p^+(k)
+///   P(K) = Phi_{K,zz},  p(K) = Phi_{K,z}
 ///
-/// ERRATUM: the printed p-equation of (30) omits L_z; it is included here (without it p is not
-/// the co-state of (21) and the gradient test fails). G_{k,z} is (n_{k+1}+K) x (n_k+K), so P
-/// and p change size across a jump.
+/// ERRATUM: the printed p-equation of (30) omits L_z; it is included here.
+/// The time normalization (12)-(17) is used in structured form: F_z = [D f_x, f c^T; 0, 0] with
+/// c = e_k - e_{k-1} (D_k = T_k - T_{k-1}), L_z = [D l_x; l c], L_zz = [D l_xx, l_x c^T; ., 0],
+/// F_u = [D f_u; 0], L_uz = [D l_ux, l_u c^T], L_uu = D l_uu.
 ///
-/// Zero-based modes: mode k lives on tau in [k, k+1] and its last sample (the pre-switch state
-/// x^-(T_k)) carries the jump from mode k+1. Coefficients are evaluated at the samples of the
-/// nominal trajectory and interpolated linearly in tau inside each interval.
+/// Zero-order hold: the input u_j is held on [tau_j, tau_{j+1}], so the coefficients of that
+/// interval are evaluated once, at (x_mid, u_j) with x_mid = (x_j + x_{j+1}) / 2, and held
+/// constant while (P, p) are integrated across it. The outputs of sample j (Gain, Feedforward,
+/// Hessian, Gradient) are those of interval j at its midpoint, the quantities the input u_j
+/// acts through; the last sample of a mode repeats the last interval's.
 ///
-/// Outputs per sample (mode k, sample j): P (n_k+K)^2, p (n_k+K), the gain
-/// L_uz + F_u^T P (m x (n_k+K)) and feed-forward L_u + F_u^T p (m) of (34), and L_uu (m x m).
+/// Alongside p the pass integrates the gradient adjoint lambda (dlambda/dtau = -(F_z^T lambda
+/// + L_z)), so Gradient() and gradient_T() are the first-order derivatives of the cost whatever
+/// the equation (for kLyapunov without use_previous_du, lambda = p).
 ///
-/// Lifecycle: Allocate once for the largest horizon; Run allocates nothing.
+/// Lifecycle: Allocate once for the largest horizon; Run allocates nothing (except the
+/// eigen-decompositions of psd_switching_hessians).
 class BackwardPass {
  public:
   BackwardPass() = default;
@@ -144,23 +110,31 @@ class BackwardPass {
   BackwardPass& operator=(const BackwardPass&) = delete;
 
   /// Sizes all buffers for up to max_samples samples in total (allocates). Validates the
-  /// problem; the problem must outlive this object.
+  /// problem and the settings; the problem must outlive this object.
   void Allocate(const Problem& problem, int max_samples, const BackwardPassSettings& settings = {});
-  /// Invalidates the results (keeps the buffers).
-  void Reset() { valid_ = false; }
-  /// Runs (30) on the grid of `nominal` (must match the problem's dimensions, at most
-  /// max_samples samples). `du_prev` (m x total samples, mode-major) is the previous control
-  /// variation at the samples; used only with settings.use_previous_du (nullptr = 0).
+  /// Runs the pass on the grid of `nominal` (must match the problem's dimensions, at most
+  /// max_samples samples) with H = L_uu + mu I, mu = `regularization` >= 0 (in the units of
+  /// L_uu = D l_uu). `du_prev` (m x total samples, mode-major) is the previous control
+  /// variation, used only with use_previous_du (nullptr = 0). Returns status() == kOk; on
+  /// kNotPositiveDefinite or kNonFinite the results are invalid (raise the regularization).
   /// Does not allocate. Throws InvalidArgument on size mismatches.
-  void Run(const Trajectory& nominal, const Matrix* du_prev = nullptr);
-  /// Sweeps of the last Run (1 without a cyclic value).
-  int sweeps() const { return sweeps_; }
+  bool Run(const Trajectory& nominal, double regularization = 0.0,
+           const Matrix* du_prev = nullptr);
   /// Forget the cyclic P_0 of the previous Run (the next Run starts from P_0 = 0).
   void ResetCyclicValue() { cyclic_valid_ = false; }
 
+  BackwardStatus status() const { return status_; }
   bool valid() const { return valid_; }
   const BackwardPassSettings& settings() const { return settings_; }
-  BackwardPassSettings& mutable_settings() { return settings_; }
+  /// True when (33) scales all of b by alpha (kLyapunov, the paper) rather than the
+  /// feed-forward only (kRiccati, the DDP convention): the convention that makes the step a
+  /// descent direction for the equation.
+  bool alpha_scales_feedback() const { return settings_.equation == BackwardEquation::kLyapunov; }
+  /// Sweeps of the last Run (1 without a cyclic value).
+  int sweeps() const { return sweeps_; }
+  double regularization() const { return mu_; }  ///< mu of the last Run
+  /// max |diag L_uu| over the intervals of the last Run (before mu; a scale for mu).
+  double luu_scale() const { return luu_scale_; }
   int num_modes() const { return K_; }
   int input_dim() const { return m_; }
   int max_samples() const { return max_samples_; }
@@ -172,107 +146,119 @@ class BackwardPass {
   int augmented_dim(int k) const { return dims_[k] + K_; }
 
   double tau(int k, int j) const { return tau_(index(k, j)); }
+  /// P and p at sample (k, j).
   Eigen::Map<const Matrix> P(int k, int j) const;
   Eigen::Map<const Vector> p(int k, int j) const;
   /// L_uz + F_u^T P, m x (n_k+K): the state/time feedback part of b in (34).
   Eigen::Map<const Matrix> Gain(int k, int j) const;
-  /// L_u + F_u^T p, m: the constant part of b in (34); with use_previous_du = false the
-  /// gradient density of the cost w.r.t. u(tau).
+  /// L_u + F_u^T p, m: the constant part of b in (34).
   Eigen::Map<const Vector> Feedforward(int k, int j) const;
-  /// L_uu, m x m.
-  Eigen::Map<const Matrix> Luu(int k, int j) const;
-  /// p_2(0) (K): with use_previous_du = false, the gradient of the cost w.r.t. T.
+  /// H = L_uu + mu I, m x m: the Hessian of (33).
+  Eigen::Map<const Matrix> Hessian(int k, int j) const;
+  /// L_u + F_u^T lambda, m: the gradient density of the cost w.r.t. u(tau) (per unit tau).
+  Eigen::Map<const Vector> Gradient(int k, int j) const;
+  /// The full (alpha = 1) step k of interval (k, j) within the input box (kRiccati; zero for
+  /// kLyapunov).
+  Eigen::Map<const Vector> Step(int k, int j) const;
+  /// p_2(0) (K): the linear term of (31).
   Eigen::Map<const Vector> p2_initial() const;
   /// P_22(0) (K x K) of (31).
   Matrix P22_initial() const;
+  /// lambda_2(0) (K): the gradient of the cost w.r.t. T.
+  const Vector& gradient_T() const { return gradient_T_; }
+  /// The predicted change of the cost for the input part of the step with alpha on the
+  /// feed-forward: alpha * linear + alpha^2 / 2 * quadratic, with linear = int k^T (L_u + F_u^T p)
+  /// dtau and quadratic = int k^T H k dtau (kRiccati; both 0 for kLyapunov).
+  double predicted_linear() const { return predicted_linear_; }
+  double predicted_quadratic() const { return predicted_quadratic_; }
 
  private:
-  // Coefficients of (30) at one point of the grid (sized for n_max; top blocks used).
-  struct Coefficients {
-    Matrix A;    // nz_max x nz_max: F_z; only the top n rows are used (the bottom K are zero)
-    Matrix Q;    // nz_max x nz_max: L_zz
-    Vector Lz;   // nz_max
-    Matrix B;    // nz_max x m: F_u; only the top n rows are used
-    Matrix Lzu;  // nz_max x m
-    Matrix Luz;  // m x nz_max
-    Vector Lu;   // m
-    Matrix Luu;  // m x m
-    Vector du;   // m: previous control variation (0 unless use_previous_du)
-    Matrix LuuInv;  // m x m: (L_uu + mu I)^{-1} (Riccati variants only)
-    void Allocate(int nz_max, int m);
+  // Coefficients of one sample interval, evaluated at (x_mid, u_j) (sized for n_max; top blocks
+  // used).
+  struct Interval {
+    Vector f;      // n: f_k
+    Matrix fx;     // n x n: D f_x
+    Matrix fu;     // n x m: D f_u
+    double l = 0;  // l_k
+    Vector lx;     // n: l_x (unscaled)
+    Vector lu;     // m: l_u (unscaled)
+    Matrix lxx;    // n x n: D l_xx
+    Matrix lux;    // m x n: D l_ux
+    Matrix H;      // m x m: D l_uu + mu I
+    Matrix Hinv;   // m x m: H_FF^{-1} on the free set, 0 elsewhere
+    Vector kc;     // m: the clamped part of the step (bound offsets on C, 0 on F)
+    Vector lo, hi; // m: the box of the step, u_min - u_j, u_max - u_j
+    double D = 1;  // duration of the mode
+    void Allocate(int n, int m);
   };
-  void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev, Coefficients* c);
-  void Interpolate(int n, int nz, const Coefficients& a, const Coefficients& b, Coefficients* c);
-  // dP/ds = P A + A^T P + Q, dp/ds = A^T p + Lz + (P B + Lzu) du in backward time s.
-  void Derivative(int n, int nz, const Coefficients& c, const ConstMatrixRef& P,
-                  const ConstVectorRef& p, MatrixRef dP, VectorRef dp);
-  void Step(int n, int nz, double h, const Coefficients& hi, const Coefficients& lo,
-            MatrixRef P, VectorRef p);
-  // kLyapunov: the same RK4/midpoint step as Step on P_, p_, with the stages fused (one
-  // product P(:, 0:n) A per stage, one pass forming dP and the next stage's P).
-  void LyapunovStep(int n, int nz, double h, const Coefficients& hi, const Coefficients& lo);
-  // dp/ds of the kLyapunov equation at stage (X, x).
-  void LyapunovDp(int n, int nz, const Coefficients& c, const ConstMatrixRef& X,
-                  const ConstVectorRef& x, VectorRef dp);
-  void StoreOutputs(int k, int j, const Coefficients& c);
+  // Stage state and derivative.
+  void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev);
+  bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
+  void Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
+                  const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
+                  bool store_mid, int s);
+  bool Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
+  void JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic);
+  bool EventProjection(int k, const Trajectory& nominal);
+  void StoreState(int k, int j);
+  void CopyOutputs(int from, int to);
 
   const Problem* problem_ = nullptr;
   BackwardPassSettings settings_;
-  std::unique_ptr<TimeNormalization> normalization_;
   int K_ = 0, m_ = 0, n_max_ = 0, nz_max_ = 0, max_samples_ = 0;
   bool valid_ = false;
+  BackwardStatus status_ = BackwardStatus::kOk;
+  double mu_ = 0;
+  double luu_scale_ = 0;
+  bool box_ = false;  // some input bound is finite
   std::vector<int> dims_;     // n_k
   std::vector<int> counts_;   // N_k of the last run
   std::vector<int> offsets_;  // first global index of mode k
-  // Per-sample storage, one column per global sample (only the leading entries are used).
+  // Per-sample storage, one column per global sample (leading entries used).
   Vector tau_;         // S
   Matrix P_store_;     // nz_max^2 x S
   Matrix p_store_;     // nz_max x S
   Matrix gain_store_;  // m * nz_max x S
   Matrix ff_store_;    // m x S
-  Matrix luu_store_;   // m^2 x S
+  Matrix grad_store_;  // m x S
+  Matrix step_store_;  // m x S
+  Matrix h_store_;     // m^2 x S
+  Vector gradient_T_;  // K
+  double predicted_linear_ = 0, predicted_quadratic_ = 0;
   // Workspace.
-  Coefficients coef_[3];  // hi (tau_{j+1}), lo (tau_j), mid
-  Vector z_;              // nz_max
-  Vector phiz_;           // nz_max
-  Matrix phizz_;          // nz_max x nz_max
-  Matrix Gz_;             // nz_max x nz_max (rectangular top-left block used)
-  Vector event_f_;        // n_max: f_k at the pre-switch sample (terminal_event)
-  Vector event_hx_;       // n_max: guard gradient
-  Matrix event_Pi_;       // n_max x n_max: the projection Pi_k
-  Matrix event_tmp_;      // nz_max x nz_max
-  double event_cost_rate_ = 0;  // l / (gamma_x^T f) at that sample
-  bool terminal_projected_ = false;  // this Run projects the terminal (event_Pi_ is set)
-  Matrix tmp_;            // nz_max x nz_max
-  Matrix P_;              // nz_max x nz_max: current P
-  Vector p_;              // nz_max: current p
-  Matrix Ps_;             // stage P
-  Vector ps_;             // stage p
-  Matrix kP_[4];          // stage derivatives of P
-  Vector kp_[4];          // stage derivatives of p
-  Matrix PA_;             // nz_max x nz_max: P(:, 0:n) F_z(0:n, :) of a stage
-  Vector Bdu_;            // n_max
-  Matrix Bt_;             // m x n_max: F_u(0:n, :)^T of the stored sample
-  Matrix M_;              // nz_max x m: P F_u + L_zu (Riccati variants)
-  Matrix W_;              // nz_max x m: M H^{-1} (Riccati variants)
-  Vector r_;              // m: L_u + F_u^T p (kRiccati)
-  Eigen::LLT<Matrix> llt_;  // m x m (Riccati variants)
-  Vector inv_range_sq_;     // m: (u_max - u_min)^-2 (kPerInput)
-  Vector mu_;               // m: regularization diagonal (Riccati variants)
-  // Cyclic value (settings.cyclic_value > 0).
-  Matrix cyclic_P0_;        // n_0 x n_0: state block of P(0) of the last sweep
-  Matrix cyclic_G_;         // n_0 x n_{K-1}: dg_{K-1}/dx at the end of the nominal
-  Matrix cyclic_tmp_;       // n_0 x n_{K-1}
+  Interval c_;
+  const Matrix* du_prev_ = nullptr;
+  int du_index_ = 0;
+  Vector xmid_;             // n_max
+  Vector phiz_;             // n_max: Phi_x
+  Matrix phizz_;            // n_max x n_max: Phi_xx
+  Matrix gx_;               // n_max x n_max: g_x of the jump
+  Vector h_;                // s_max
+  Matrix hx_;               // s_max x n_max
+  Matrix P_, Ps_, dP_[4];   // nz_max x nz_max: current, stage, stage derivatives
+  Vector p_, ps_, dp_[4];   // nz_max
+  Vector lam_, lams_, dlam_[4];  // nz_max: gradient adjoint
+  Matrix Z_;                // nz_max x n_max: P(:, 0:n) (D f_x)
+  Vector w_;                // nz_max: P(:, 0:n) f
+  Matrix M_;                // nz_max x m: P F_u + L_zu
+  Matrix W_;                // nz_max x m: M Hinv
+  Vector hx_curv_, hu_curv_;  // n, m: f_x^T p_x, f_u^T p_x
+  Vector gu_, k_, tmpm_;    // m
+  Vector bdu_;              // n_max: F_u du_prev
+  Matrix tmp_;              // nz_max x nz_max
+  Eigen::LLT<Matrix> llt_;  // m x m
+  Matrix hff_;              // m x m
+  std::vector<int> free_;   // m
+  BoxQP qp_;
+  // Terminal event projection.
+  Vector event_f_, event_hx_;  // n_max
+  Matrix event_Pi_;            // n_max x n_max
+  double event_cost_rate_ = 0;
+  bool terminal_projected_ = false;
+  // Cyclic value.
+  Matrix cyclic_P0_, cyclic_G_, cyclic_tmp_;  // n_max x n_max
   bool cyclic_valid_ = false;
   int sweeps_ = 0;
-  void Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
-  // terminal_event: Pi_k into event_Pi_ (n_k x n_k) and l / (gamma_x^T f) into
-  // event_cost_rate_, at mode k's last nominal sample. Returns false (no projection) when the
-  // system has no guard gradient or the flow is tangent to the guard.
-  bool EventProjection(int k, const Trajectory& nominal);
-  BackwardEquation equation_ = BackwardEquation::kLyapunov;  // effective equation
-  bool riccati() const { return equation_ != BackwardEquation::kLyapunov; }
-  void Invert(Coefficients* c);
 };
 
 }  // namespace ddoc

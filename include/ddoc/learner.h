@@ -18,46 +18,54 @@
 
 namespace ddoc {
 
-/// Settings of Learner (Algorithm 1).
+/// How a trial is accepted (Algorithm 1's line search).
+enum class Acceptance {
+  /// (36) as printed: I^{i+1} - I^i <= -c (int |du|^2 dtau + |dT|^2), measured du and dT.
+  kSufficientDecrease,
+  /// Armijo on the LQ model's prediction (the default): I^{i+1} - I^i <= c * dI_pred(alpha),
+  /// dI_pred(alpha) = alpha a + alpha^2 / 2 b + (1/2 dT^T P22 dT + p2^T dT) < 0 from the backward
+  /// pass (BackwardPass::predicted_linear/quadratic, SwitchingTimeStep::model_change). Scale-free:
+  /// it compares the measured change with what the step was expected to achieve.
+  kPredictedDecrease,
+};
+
+/// Settings of Learner (Algorithm 1). `LearnerSettings{}` is the recommended default (box-aware
+/// Riccati backward pass with exact time curvature, alpha on the feed-forward, Armijo on the
+/// predicted decrease with interpolated backtracking, Levenberg-Marquardt regularization that
+/// vanishes at convergence); `LearnerSettings::Paper()` is Algorithm 1 as printed.
+/// docs/engine.md derives both.
 struct LearnerSettings {
-  double c = 1e-4;              ///< sufficient-decrease constant c of (36), > 0
-  double gamma = 0.5;           ///< backtracking factor: alpha <- gamma alpha, in (0, 1)
+  Acceptance acceptance = Acceptance::kPredictedDecrease;  ///< default kPredictedDecrease
+  /// c of (36) (kSufficientDecrease) or the Armijo fraction of the predicted decrease
+  /// (kPredictedDecrease), > 0. Default 1e-4.
+  double c = 1e-4;
+  /// Backtracking: alpha <- gamma alpha (interpolate_backtracking = false), or the upper cap of
+  /// the interpolated step. In (0, 1), default 0.5.
+  double gamma = 0.5;
+  /// After a rejected trial, alpha <- the minimizer of the quadratic through the measured change
+  /// and the predicted slope, clamped to [0.1 alpha, gamma alpha] (true, default); false: gamma
+  /// alpha (the paper).
+  bool interpolate_backtracking = true;
   double alpha_initial = 1.0;   ///< alpha at the start and after every accepted trial, in (0, 1]
-  /// Algorithm 1 restarts every iteration at alpha = alpha_initial (true). false: after an
-  /// accepted trial alpha <- min(alpha_initial, alpha / gamma), so a robot that needed a small
-  /// alpha does not spend a run of rejected trials backtracking again every iteration.
+  /// Algorithm 1 restarts every iteration at alpha = alpha_initial (true, default). false: after
+  /// an accepted trial alpha <- min(alpha_initial, alpha / gamma).
   bool reset_alpha_on_accept = true;
-  /// Option for robots whose trials start where the previous one ended (default false = (36)
-  /// as printed). true: (36) compares the trial's cost with the nominal's cost predicted for the
-  /// trial's own initial state, to second order from the backward pass at tau = 0,
-  ///   I^i(x0^{i+1}) ~ I^i + p_1(0)^T dx0 + 1/2 dx0^T P_11(0) dx0,  dx0 = x0^{i+1} - x0^i,
-  /// so that a trial is not rejected (or accepted) only because it started in a worse (or
-  /// better) state. The cost must then not depend on x0 otherwise (e.g. no reference that moves
-  /// with the start). Measured on the MuJoCo hopper (tools/hop_experiment, plugin): more trials
-  /// pass (36) but the second-order prediction is too coarse for hop-to-hop deviations, so worse
-  /// laws get accepted (exact 12 kg robot falls at hop 27); hence off by default.
-  bool initial_state_correction = false;
-  /// Non-monotone acceptance (NOT the paper; Grippo-Lampariello-Lucidi line search). 1 = (36)
-  /// as printed. M > 1: (36) compares the trial's cost with the LARGEST of the costs of the last
-  /// M accepted nominals, I^{i+1} - max_{j = 0..M-1} I^{i-j} <= -c (int |du|^2 + |dT|^2),
-  /// (the backward pass still runs along the newest accepted trial), so that one accepted trial
-  /// that happened to start in a good state does not block every later one. >= 1.
-  /// Measured on the MuJoCo hopper (plugin, M = 3): no effect on the inexact 12 kg robot (no
-  /// trial is ever accepted there, so the memory holds only I^0); mixed elsewhere (mRL exact
-  /// 8 kg mean cost of the last 20 hops 0.995 vs 1.031, Algorithm 1 inexact 8 kg 1.135 vs 1.090).
-  int nonmonotone_memory = 1;
-  /// Re-baselining (NOT the paper) for robots whose trials start where the previous one ended.
-  /// 0 = off. N > 0: after N consecutive rejected trials, the nominal's cost I^i is taken as no
-  /// longer reproducible from the robot's current states, and Algorithm 1 restarts from the
-  /// last (rejected) trial as if it were the initial one: it becomes the nominal x^i with its
-  /// measured cost, (30) runs along it, the cost memory is cleared; alpha and the iteration
-  /// count are kept. TrialResult::rebaselined reports it (accepted stays false).
-  /// Measured on the MuJoCo hopper (plugin): worse. N = 3: Algorithm 1 inexact 8 kg robot falls
-  /// at hop 20 (survives without), inexact 12 kg at hop 9 (14 without); N = 1, 2, 5: 6, 8, 10.
-  int rebaseline_after = 0;
   double alpha_min = 1e-6;      ///< line search fails (terminated) when alpha drops below
-  double epsilon = 1e-8;        ///< convergence: int |du|^2 dtau + |dT|^2 <= epsilon ...
-  int delta_i = 2;              ///< ... for the last delta_i accepted iterations (Delta i)
+  /// Algorithm 1's convergence test: int |du|^2 dtau + |dT|^2 <= epsilon for the last delta_i
+  /// accepted iterations (step_convergence, the paper preset), together with the optimality
+  /// guard below. Default off: convergence is the optimality test alone.
+  bool step_convergence = false;
+  double epsilon = 1e-8;        ///< threshold of the step test
+  int delta_i = 2;              ///< Delta i of the step test
+  /// First-order optimality (ComputeOptimality: the projected gradient w.r.t. u(.) and T) at
+  /// which the learner has converged, relative to its value at the initial nominal; no test
+  /// reports convergence above it. Default 1e-6.
+  double optimality_tolerance = 1e-6;
+  /// Floor of the Levenberg-Marquardt regularization mu of H = L_uu + mu I (units of
+  /// L_uu = D l_uu): mu starts here, grows 10x when the backward pass fails (not positive
+  /// definite, non-finite), shrinks 10x after each accepted trial, never below the floor.
+  /// Default 0 (the converged gain is the exact one).
+  double regularization_min = 0.0;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
   BackwardPassSettings backward;         ///< (30)
@@ -65,28 +73,49 @@ struct LearnerSettings {
   OnlineControllerSettings controller;   ///< (33)-(34)
 
   /// The `paper` preset: Algorithm 1 as printed (Lyapunov-type (30) with the previous control
-  /// variation driving p, alpha on all of (31) and (33), (36), the convergence test), with only
-  /// the L_z erratum of (30) fixed. What the reproduction runs.
+  /// variation driving p, alpha on all of (31) and (33), (36) with gamma backtracking, the
+  /// convergence test), with only the L_z erratum of (30) fixed. What the reproduction runs.
   static LearnerSettings Paper();
 };
 
+/// The named presets of LearnerSettings.
+enum class Preset {
+  kDefault,  ///< LearnerSettings{}
+  kPaper,    ///< LearnerSettings::Paper()
+};
+/// The settings of a preset.
+LearnerSettings PresetSettings(Preset preset);
+
 enum class LearnerStatus {
   kRunning = 0,      ///< learning continues
-  kConverged,        ///< the convergence test of Algorithm 1 holds
+  kConverged,        ///< the optimality (and, with step_convergence, the step) test holds
   kLineSearchFailed, ///< alpha < alpha_min: terminated with the previous control law
   kMaxTrials,        ///< batch Solve hit max_trials
 };
 
+/// First-order optimality of a nominal: the norm of the gradient of the cost projected onto the
+/// feasible directions, ||P(grad_u)||_{L2 in t} for the inputs (components at a bound whose
+/// gradient points out of the box removed) and ||P(grad_D)|| for the durations (the tangent cone
+/// of (7) and the final-time box). Units: cost per input unit per sqrt(s), and cost per s.
+struct Optimality {
+  double inputs = 0;  ///< sqrt(int |P(dI/du(t))|^2 dt)
+  double times = 0;   ///< |P(dI/dD)|
+  double total = 0;   ///< sqrt(inputs^2 + times^2)
+};
+/// The optimality of `nominal`, from the gradient adjoint of a pass run on it.
+Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
+                             const BackwardPass& pass);
+
 /// What happened in one trial.
 struct TrialResult {
-  bool accepted = false;    ///< (36) held; the trial became the new nominal
+  bool accepted = false;    ///< the acceptance test held; the trial became the new nominal
   double cost = 0;          ///< measured cost I^{i+1} of the trial (inf for an aborted trial)
   double nominal_cost = 0;  ///< cost I^i of the nominal it was compared with
-  double decrease = 0;      ///< I^{i+1} - I^i (I^i corrected to x0^{i+1}, see settings)
-  double expected_nominal_cost = 0;  ///< I^i, or its prediction at x0^{i+1} (correction on)
-  bool rebaselined = false; ///< rejected, but became the nominal (settings.rebaseline_after)
+  double decrease = 0;      ///< I^{i+1} - I^i
+  double predicted = 0;     ///< the predicted change dI_pred(alpha) (0 for kLyapunov's pass)
   double step = 0;          ///< int |du|^2 dtau + |dT|^2 (measured dT, du vs. nominal inputs)
   double alpha = 0;         ///< alpha used for this trial
+  double optimality = 0;    ///< Optimality::total of the nominal after the trial
   int iteration = 0;        ///< accepted iterations so far (i after the trial)
   int trial = 0;            ///< trials so far
   LearnerStatus status = LearnerStatus::kRunning;
@@ -100,6 +129,7 @@ struct SolveResult {
   int iterations = 0;              ///< accepted trials
   double cost = 0;                 ///< cost of the final nominal (as measured by the cost plant)
   Vector T;                        ///< K: switching instants of the final nominal
+  Optimality optimality;           ///< of the final nominal
   std::vector<double> cost_history;  ///< cost of the nominal after each accepted trial (incl. 0)
 };
 
@@ -122,8 +152,9 @@ struct SolveResult {
 ///     TrialResult r = learner.CompleteTrial(measured);  // (36), then (30) if accepted
 ///   }
 ///
-/// Rejected trials: a trial on a robot has happened even when (36) fails. The nominal stays the
-/// last ACCEPTED trajectory (with its cost I^i), alpha <- gamma alpha, and the next trial is
+/// Rejected trials: a trial on a robot has happened even when it fails the acceptance test. The
+/// nominal stays the last ACCEPTED trajectory (with its cost I^i), alpha shrinks (backtracking),
+/// and the next trial is
 /// controlled around that nominal with the smaller alpha, starting from whatever state the
 /// robot is in (the feedback in (34) absorbs the initial deviation). When alpha < alpha_min the
 /// learner is terminated (kLineSearchFailed): NextTrial() then returns the control law that
@@ -166,8 +197,8 @@ class Learner {
 
   /// The converged feed-forward + feedback law: (33)-(34) around the current nominal with
   /// dT = 0 (planned T = nominal T) and the given alpha. Used by OC-FB on the real plant.
-  /// With settings.controller.alpha_scales_feedback = false and alpha = 0 it is exactly
-  /// "nominal inputs + feedback on dx", whether or not the gradient L_u + F_u^T p has vanished.
+  /// With the kRiccati convention and alpha = 0 it is exactly "nominal inputs + feedback on
+  /// dx", whether or not the gradient L_u + F_u^T p has vanished.
   OnlineController& ConvergedPolicy(double alpha = 1.0);
 
   LearnerStatus status() const { return status_; }
@@ -181,12 +212,23 @@ class Learner {
   const SwitchingTimeStep& switching_step() const { return switching_step_; }
   const std::vector<double>& step_history() const { return step_history_; }
   const LearnerSettings& settings() const { return settings_; }
+  /// First-order optimality of the current nominal, and at the initial nominal.
+  const Optimality& optimality() const { return optimality_; }
+  const Optimality& initial_optimality() const { return initial_optimality_; }
+  /// The Levenberg-Marquardt regularization mu of the current backward pass.
+  double regularization() const { return mu_; }
 
  private:
-  void AcceptNominal(const Trajectory& direction, double cost);
+  // Makes `direction` the nominal with cost `cost` and runs (30) on it, raising mu until the
+  // pass succeeds. Returns false (nominal unchanged) when it never does.
+  bool AcceptNominal(const Trajectory& direction, double cost);
+  // (30) on nominal_ with the current mu, raising it on failure.
+  bool RunPass();
+  // The status after a new nominal: converged when the optimality (and step) tests hold.
+  void UpdateConvergence();
   // The trial `measured` (run with controllers_[active_]) becomes the nominal with cost `cost`:
   // itself, or its re-run on direction_plant when one is given (mRL).
-  void AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost);
+  bool AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost);
   // int |u_a(tau) - u_b(tau)|^2 dtau on a's grid, b interpolated in tau (trapezoid).
   static double InputDistance(const Trajectory& a, const Trajectory& b);
   // du_prev(s) = u_new(tau_s) - u_old(tau_s) at the samples of new (m x samples).
@@ -210,9 +252,10 @@ class Learner {
   LearnerStatus status_ = LearnerStatus::kRunning;
   SwitchingTimeStep switching_step_;
   std::vector<double> step_history_;  // step of each accepted trial
-  std::vector<double> cost_memory_;   // costs of the last nonmonotone_memory nominals
-  int rejections_ = 0;                // consecutive rejected trials
   Matrix du_prev_;                    // m x samples
+  double mu_ = 0;                     // Levenberg-Marquardt regularization of (30), (33)
+  double luu_scale_ = 0;              // max |diag L_uu| seen, for the first raise of mu
+  Optimality optimality_, initial_optimality_;
 };
 
 }  // namespace ddoc

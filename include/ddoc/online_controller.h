@@ -16,42 +16,29 @@ namespace ddoc {
 
 /// Settings of OnlineController.
 struct OnlineControllerSettings {
-  /// mu added to the diagonal of L_uu in (33), relative: mu = regularization * (1 + max|diag L_uu|).
-  /// Keeps the QP strictly convex when l_uu is singular.
-  double regularization = 1e-9;
-  /// How mu is formed from `regularization` (default kScalar, the formula above; kPerInput:
-  /// mu_i = regularization (|L_uu,ii| + (u_max_i - u_min_i)^-2), H = L_uu + diag(mu)). Use the
-  /// same value as BackwardPassSettings::regularization_scaling with a Riccati backward pass.
-  RegularizationScaling regularization_scaling = RegularizationScaling::kScalar;
-  /// Interpolate nominal and gains linearly in tau between samples (true) or hold the sample
-  /// at or before tau (false).
+  /// Interpolate nominal and gains linearly in tau between samples (true, default) or hold the
+  /// sample at or before tau (false).
   bool interpolate = true;
-  /// Warm-start the box QP with the previous step's du.
+  /// Warm-start the box QP with the previous step's du (default true).
   bool warm_start = true;
-  /// true (the paper's (33)): alpha multiplies all of b, feedback included, so alpha -> 0
-  /// replays the nominal inputs open loop. false (the DDP convention): alpha multiplies only the
-  /// feed-forward L_u + F_u^T p; the feedback (L_uz + F_u^T P)[dx; dT_alpha] stays whole, so
-  /// alpha -> 0 tracks the nominal trajectory with feedback. dT_alpha comes from (31) either way.
-  bool alpha_scales_feedback = true;
-  /// kappa: multiplies the state feedback (L_uz + F_u^T P) dx of (34) (1: as printed).
-  double feedback_scale = 1.0;
-  /// Per-component feedback scale (NOT the paper; empty = all ones, as printed): one vector per
-  /// mode k with that mode's state dimension; component i of dx is multiplied by
-  /// state_feedback_scale[k](i) before the gain of (34). Entries must be finite and >= 0. Used by
-  /// the hopper to soften the flight pitch feedback of learned laws (see ddoc-return-map).
+  /// Per-component feedback scale, an experiment (NOT the paper; empty = all ones, as printed,
+  /// the default): one vector per mode k with that mode's state dimension; component i of dx is
+  /// multiplied by state_feedback_scale[k](i) before the gain of (34). Finite and >= 0.
   std::vector<Vector> state_feedback_scale;
   BoxQPSettings qp;  ///< settings of the m-dimensional box QP
 };
 
 /// The control law of trial i+1, built from nominal trial i (Algorithm 1, online part):
 ///
-///   du = argmin_{du in U - u^i(tau)} 1/2 du^T L_uu du + alpha du^T b                 (33)
-///   b  = (L_uz + F_u^T P) [dx; dT_alpha] + L_u + F_u^T p                              (34)
+///   du = argmin_{du in U - u^i(tau)} 1/2 du^T H du + du^T b                          (33)
+///   b  = alpha [(L_uz + F_u^T P) [dx; dT_alpha] + L_u + F_u^T p]     (kLyapunov, the paper)
+///   b  = (L_uz + F_u^T P) [dx; dT_alpha] + alpha (L_u + F_u^T p)     (kRiccati, DDP)   (34)
 ///   u  = clamp(u^i(tau) + du, u_min, u_max)                                           (35)
 ///
 /// with dx = x_measured - x^i(tau) the measured deviation from the nominal state at the same
-/// normalized time. The gains (L_uz + F_u^T P) and (L_u + F_u^T p) come from the BackwardPass;
-/// the dT part is folded into the constant at Load, so a Step costs O(n m + m^3).
+/// normalized time and H = L_uu + mu I. The gains, H and the convention for alpha come from the
+/// BackwardPass (each equation's convention makes the step a descent direction); the dT part is
+/// folded into the constant at Load, so a Step costs O(n m + m^3).
 ///
 /// Time mapping (see Policy): tau = k + clamp(t_since_mode_start / D_k^{i+1}, 0, 1) with the
 /// planned durations of T^{i+1} = T^i + dT_alpha. A mode lasting longer than planned keeps the
@@ -84,6 +71,8 @@ class OnlineController : public Policy {
             VectorRef u_out) override;
 
   double alpha() const { return alpha_; }
+  /// The factor of the state feedback in b: alpha (kLyapunov) or 1 (kRiccati).
+  double feedback_factor() const { return feedback_factor_; }
   const Vector& dT() const { return dT_; }                    ///< K
   const Vector& planned_T() const { return planned_T_; }      ///< K: T^{i+1}
   const Vector& nominal_T() const { return nominal_T_; }      ///< K: T^i
@@ -98,7 +87,7 @@ class OnlineController : public Policy {
   /// The last du (m) and tau.
   const Vector& last_du() const { return du_; }
   double last_tau() const { return last_tau_; }
-  OnlineControllerSettings& settings() { return settings_; }
+  const OnlineControllerSettings& settings() const { return settings_; }
   /// Replaces OnlineControllerSettings::state_feedback_scale (validated like Allocate: one
   /// vector per mode of that mode's state size, entries finite and >= 0; empty = as printed).
   /// Allocates; call between trials.
@@ -121,9 +110,9 @@ class OnlineController : public Policy {
   Matrix x_;    // n_max x S: nominal states
   Matrix u_;    // m x S: nominal inputs
   Matrix Kx_;   // m * n_max x S: state gain (L_uz + F_u^T P)(:, 0:n_k), column-major m x n_k
-  Matrix c_;    // m x S: (L_uz + F_u^T P)(:, n_k:) dT + L_u + F_u^T p
-  Matrix cff_;  // m x S: L_u + F_u^T p (the feed-forward part of c_)
-  Matrix luu_;  // m^2 x S
+  Matrix c_;    // m x S: the constant part of b (dT and alpha folded in)
+  Matrix huu_;  // m^2 x S: H = L_uu + mu I
+  double feedback_factor_ = 1;  // alpha (kLyapunov) or 1 (kRiccati)
   // Step workspace.
   BoxQP qp_;
   Vector dx_;      // n_max
@@ -132,8 +121,6 @@ class OnlineController : public Policy {
   Vector b_;       // m
   Matrix H_;       // m x m
   Vector lo_, hi_; // m
-  Vector mu_;      // m: regularization diagonal of H
-  Vector inv_range_sq_;  // m: (u_max - u_min)^-2 (kPerInput)
   Vector du_;      // m
   // Per-trial bookkeeping.
   double du_integral_ = 0;

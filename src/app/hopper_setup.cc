@@ -83,19 +83,9 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.initial_hops) config.initial_hops = *l.initial_hops;
   if (l.alpha_min) config.learner.alpha_min = *l.alpha_min;
   if (l.max_duration_step) config.learner.switching.max_duration_step = *l.max_duration_step;
-  if (l.alpha_scales_feedback) config.learner.controller.alpha_scales_feedback = *l.alpha_scales_feedback;
   if (l.regularization) {
-    config.learner.controller.regularization = *l.regularization;
-    config.model_learner.controller.regularization = *l.regularization;
-  }
-  if (l.per_input_regularization) {
-    const RegularizationScaling scaling = *l.per_input_regularization
-                                              ? RegularizationScaling::kPerInput
-                                              : RegularizationScaling::kScalar;
-    for (LearnerSettings* ls : {&config.learner, &config.model_learner}) {
-      ls->controller.regularization_scaling = scaling;
-      ls->backward.regularization_scaling = scaling;
-    }
+    config.learner.regularization_min = *l.regularization;
+    config.model_learner.regularization_min = *l.regularization;
   }
   if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
   if (l.alpha_initial) config.learner.alpha_initial = *l.alpha_initial;

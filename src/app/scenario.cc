@@ -162,17 +162,11 @@ Scenario LoadScenario(const std::string& path) {
       l.regularization = OptionalDouble(path, e, "regularization");
       l.alpha_initial = OptionalDouble(path, e, "alpha_initial");
       l.cyclic_value = OptionalDouble(path, e, "cyclic_value");
-      if (auto v = OptionalChoice(path, e, "alpha_scales", "all", "feedforward")) {
-        l.alpha_scales_feedback = *v == "all";
-      }
       if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
         l.terminal_event = *v == "event";
       }
       if (auto v = OptionalChoice(path, e, "reference", "own", "gait")) {
         l.anchor_reference = *v == "gait";
-      }
-      if (auto v = OptionalChoice(path, e, "regularization_scaling", "scalar", "per_input")) {
-        l.per_input_regularization = *v == "per_input";
       }
       if (auto v = OptionalChoice(path, e, "alpha_after_accept", "reset", "grow")) {
         l.reset_alpha_on_accept = *v == "reset";

@@ -53,11 +53,7 @@ struct LearningOverrides {
   std::optional<int> initial_hops;          // HopperControllerConfig::initial_hops, >= 1
   std::optional<double> alpha_min;          // line search gives up below this alpha
   std::optional<double> max_duration_step;  // cap on |dD_k| of (31), s
-  std::optional<double> regularization;     // mu of (33): L_uu + mu (1 + max|diag L_uu|) I
-  std::optional<bool> alpha_scales_feedback;  // alpha_scales="all" (paper) | "feedforward"
-  // regularization_scaling="scalar" (one mu for all inputs) | "per_input" (mu_i in normalized
-  // input units, RegularizationScaling::kPerInput); both learners, controller and Riccati pass
-  std::optional<bool> per_input_regularization;
+  std::optional<double> regularization;     // LearnerSettings::regularization_min (both learners)
   std::optional<bool> reset_alpha_on_accept;  // alpha_after_accept="reset" (paper) | "grow"
   std::optional<double> alpha_initial;      // alpha_0 of the line search, in (0, 1]
   std::optional<double> cyclic_value;       // BackwardPassSettings::cyclic_value, in [0, 1]

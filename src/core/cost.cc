@@ -16,13 +16,13 @@ CostBreakdown EvaluateCost(const Problem& problem, const Trajectory& trajectory)
   for (int k = 0; k < K; ++k) {
     const ModeTrajectory& mode = trajectory.modes[k];
     const int N = mode.num_samples();
-    // Trapezoidal rule on the samples.
-    double prev = cost.Running(k, mode.x.col(0), mode.u.col(0));
+    // Trapezoidal rule on each sample interval with the input held there (zero-order hold):
+    // int_{t_j}^{t_{j+1}} l dt ~ (t_{j+1} - t_j) (l(x_j, u_j) + l(x_{j+1}, u_j)) / 2.
     double running = 0;
-    for (int j = 1; j < N; ++j) {
-      const double cur = cost.Running(k, mode.x.col(j), mode.u.col(j));
-      running += 0.5 * (mode.t(j) - mode.t(j - 1)) * (prev + cur);
-      prev = cur;
+    for (int j = 0; j + 1 < N; ++j) {
+      const auto u = mode.u.col(j);
+      running += 0.5 * (mode.t(j + 1) - mode.t(j)) *
+                 (cost.Running(k, mode.x.col(j), u) + cost.Running(k, mode.x.col(j + 1), u));
     }
     out.running(k) = running;
     out.switching(k) = cost.Switching(k, mode.x.col(N - 1));

@@ -8,6 +8,8 @@
 namespace ddoc {
 namespace {
 
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
 void CheckSetting(bool ok, const std::string& what) {
   if (!ok) throw InvalidArgument("LearnerSettings: " + what);
 }
@@ -27,14 +29,82 @@ void InterpolateInput(const Trajectory& traj, int k, double tau, int* cursor, Ve
   u = (1.0 - w) * mode.u.col(j) + w * mode.u.col(j + 1);
 }
 
+// Raises mu for a failed backward pass: 10x, at least to 1e-6 of the L_uu scale.
+double RaisedRegularization(double mu, double luu_scale) {
+  return std::max(10.0 * mu, 1e-6 * std::max(luu_scale, 1e-12));
+}
+
+constexpr int kMaxRegularizationRaises = 30;
+
 }  // namespace
 
 LearnerSettings LearnerSettings::Paper() {
   LearnerSettings s;
+  s.acceptance = Acceptance::kSufficientDecrease;
+  s.interpolate_backtracking = false;
+  s.step_convergence = true;
   s.backward.equation = BackwardEquation::kLyapunov;
+  s.backward.time_curvature = false;
   s.backward.use_previous_du = true;
-  s.controller.alpha_scales_feedback = true;
   return s;
+}
+
+LearnerSettings PresetSettings(Preset preset) {
+  return preset == Preset::kPaper ? LearnerSettings::Paper() : LearnerSettings{};
+}
+
+Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
+                             const BackwardPass& pass) {
+  Optimality out;
+  const int K = problem.num_modes();
+  const int m = problem.input_dim();
+  const Vector& umin = problem.bounds.u_min;
+  const Vector& umax = problem.bounds.u_max;
+  // Inputs: int |P(dI/du(t))|^2 dt = sum_j h_tau |P(grad_j)|^2 / D_k (grad per unit tau).
+  double sum_u = 0;
+  for (int k = 0; k < K; ++k) {
+    const ModeTrajectory& mode = nominal.modes[k];
+    const double D = nominal.T(k) - nominal.ModeStart(k);
+    for (int j = 0; j + 1 < mode.num_samples(); ++j) {
+      const double h = pass.tau(k, j + 1) - pass.tau(k, j);
+      const auto g = pass.Gradient(k, j);
+      double sq = 0;
+      for (int i = 0; i < m; ++i) {
+        const double u = mode.u(i, j);
+        const double tol = 1e-9 * (1.0 + std::abs(u));
+        const bool out_low = u <= umin(i) + tol && g(i) > 0;
+        const bool out_high = u >= umax(i) - tol && g(i) < 0;
+        if (!out_low && !out_high) sq += g(i) * g(i);
+      }
+      sum_u += h * sq / D;
+    }
+  }
+  out.inputs = std::sqrt(sum_u);
+  // Durations: the gradient w.r.t. D (S^T dI/dT) projected onto the tangent cone of (7) and the
+  // final-time box: v = argmin 1/2 |v|^2 + g^T v over the cone, |v| = |P(-g)|.
+  Vector gD(K);
+  const Vector& gT = pass.gradient_T();
+  double acc = 0;
+  for (int k = K - 1; k >= 0; --k) {
+    acc += gT(k);
+    gD(k) = acc;
+  }
+  Vector lo(K), hi(K);
+  for (int k = 0; k < K; ++k) {
+    const double D = nominal.T(k) - nominal.ModeStart(k);
+    const double tol = 1e-12 * std::max(1.0, D);
+    lo(k) = D <= problem.bounds.duration_min(k) + tol ? 0.0 : -kInf;
+    hi(k) = D >= problem.bounds.duration_max(k) - tol ? 0.0 : kInf;
+  }
+  const double TK = nominal.T(K - 1);
+  const double ttol = 1e-12 * std::max(1.0, TK);
+  const double sum_lo = TK <= problem.bounds.final_time_min + ttol ? 0.0 : -kInf;
+  const double sum_hi = TK >= problem.bounds.final_time_max - ttol ? 0.0 : kInf;
+  Vector v;
+  SolveDurationQp(Matrix::Identity(K, K), gD, lo, hi, sum_lo, sum_hi, &v);
+  out.times = v.norm();
+  out.total = std::sqrt(out.inputs * out.inputs + out.times * out.times);
+  return out;
 }
 
 Learner::Learner(const Problem& problem, const LearnerSettings& settings)
@@ -48,42 +118,56 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
                "alpha_min must be in [0, alpha_initial)");
   CheckSetting(settings.epsilon > 0, "epsilon must be > 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
-  CheckSetting(settings.nonmonotone_memory >= 1, "nonmonotone_memory must be >= 1");
-  CheckSetting(settings.rebaseline_after >= 0, "rebaseline_after must be >= 0");
+  CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
+               "optimality_tolerance must be finite and >= 0");
+  CheckSetting(settings.regularization_min >= 0 && std::isfinite(settings.regularization_min),
+               "regularization_min must be finite and >= 0");
   CheckSetting(settings.max_trials >= 1, "max_trials must be >= 1");
   CheckSetting(settings.max_samples >= 2, "max_samples must be >= 2");
   pass_.Allocate(problem, settings.max_samples, settings.backward);
   for (auto& c : controllers_) c.Allocate(problem, settings.max_samples, settings.controller);
+  mu_ = settings.regularization_min;
 }
 
-void Learner::AcceptNominal(const Trajectory& direction, double cost) {
+bool Learner::RunPass() {
+  const bool previous = settings_.backward.use_previous_du && iteration_ > 0 &&
+                        du_prev_.cols() == nominal_.total_samples();
+  for (int raise = 0; raise <= kMaxRegularizationRaises; ++raise) {
+    if (pass_.Run(nominal_, mu_, previous ? &du_prev_ : nullptr)) {
+      luu_scale_ = std::max(luu_scale_, pass_.luu_scale());
+      optimality_ = ComputeOptimality(*problem_, nominal_, pass_);
+      return true;
+    }
+    luu_scale_ = std::max(luu_scale_, pass_.luu_scale());
+    mu_ = RaisedRegularization(mu_, luu_scale_);
+  }
+  return false;
+}
+
+bool Learner::AcceptNominal(const Trajectory& direction, double cost) {
   direction.Validate(*problem_->system);
-  const Matrix* du = nullptr;
-  if (settings_.backward.use_previous_du && initialized_) {
+  const bool use_du = settings_.backward.use_previous_du && initialized_;
+  if (use_du) {
     // du^{i-1} at the samples of the new nominal: u^{i+1}(tau) - u^i(tau).
     InputDifference(direction, nominal_, &du_prev_);
-    du = &du_prev_;
   }
   previous_nominal_ = std::move(nominal_);
   nominal_ = direction;
-  nominal_cost_ = cost;
-  cost_memory_.push_back(cost);
-  const size_t memory = static_cast<size_t>(settings_.nonmonotone_memory);
-  if (cost_memory_.size() > memory) {
-    cost_memory_.erase(cost_memory_.begin(), cost_memory_.end() - memory);
+  if (!RunPass()) {
+    nominal_ = std::move(previous_nominal_);
+    pass_.Run(nominal_, mu_);  // restore the pass of the previous nominal (it succeeded before)
+    return false;
   }
-  pass_.Run(nominal_, du);
+  nominal_cost_ = cost;
+  return true;
 }
 
-void Learner::AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost) {
-  if (direction_plant == nullptr) {
-    AcceptNominal(measured, cost);
-    return;
-  }
+bool Learner::AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost) {
+  if (direction_plant == nullptr) return AcceptNominal(measured, cost);
   // mRL: the direction trajectory is the same law re-run on the direction plant.
   Trajectory direction;
   direction_plant->Run(measured.x0, controllers_[active_], &direction);
-  AcceptNominal(direction, cost);
+  return AcceptNominal(direction, cost);
 }
 
 void Learner::RecomputeDirection() {
@@ -91,8 +175,24 @@ void Learner::RecomputeDirection() {
   if (trial_pending_) {
     throw InvalidArgument("Learner::RecomputeDirection: a trial is pending (call CompleteTrial first)");
   }
-  const bool previous = settings_.backward.use_previous_du && iteration_ > 0;
-  pass_.Run(nominal_, previous ? &du_prev_ : nullptr);
+  if (!RunPass()) {
+    throw InvalidArgument("Learner::RecomputeDirection: the backward pass failed for every "
+                          "regularization tried");
+  }
+}
+
+void Learner::UpdateConvergence() {
+  const double limit = settings_.optimality_tolerance * initial_optimality_.total;
+  bool converged = optimality_.total <= limit;
+  if (settings_.step_convergence) {
+    const int n = static_cast<int>(step_history_.size());
+    bool steps = n >= settings_.delta_i;
+    for (int i = std::max(0, n - settings_.delta_i); i < n && steps; ++i) {
+      steps = step_history_[i] <= settings_.epsilon;
+    }
+    converged = converged && steps;
+  }
+  status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
 }
 
 void Learner::Initialize(const Trajectory& measured, const Trajectory* direction) {
@@ -101,18 +201,27 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
     throw InvalidArgument("Learner::Initialize: the initial trial has a non-finite cost");
   }
   initialized_ = false;
-  cost_memory_.clear();
-  rejections_ = 0;
-  AcceptNominal(direction ? *direction : measured, cost.total);
+  iteration_ = 0;
+  mu_ = settings_.regularization_min;
+  luu_scale_ = 0;
+  if (!AcceptNominal(direction ? *direction : measured, cost.total)) {
+    throw InvalidArgument("Learner::Initialize: the backward pass failed for every "
+                          "regularization tried (mu up to " + std::to_string(mu_) + ")");
+  }
   initialized_ = true;
   alpha_ = settings_.alpha_initial;
-  iteration_ = 0;
   trials_ = 0;
   accepted_ = -1;
   active_ = 0;
   trial_pending_ = false;
-  status_ = LearnerStatus::kRunning;
   step_history_.clear();
+  initial_optimality_ = optimality_;
+  status_ = LearnerStatus::kRunning;
+  // A nominal that is already optimal (zero gradient) has converged; with the step test it
+  // still needs delta_i accepted iterations.
+  if (!settings_.step_convergence && initial_optimality_.total == 0) {
+    status_ = LearnerStatus::kConverged;
+  }
 }
 
 OnlineController& Learner::NextTrial() {
@@ -177,13 +286,13 @@ TrialResult Learner::AbortTrial() {
   ++trials_;
   r.trial = trials_;
   r.alpha = alpha_;
-  r.cost = std::numeric_limits<double>::infinity();
+  r.cost = kInf;
   r.nominal_cost = nominal_cost_;
   r.decrease = r.cost;
+  r.optimality = optimality_.total;
   trial_pending_ = false;
-  ++rejections_;
   if (status_ != LearnerStatus::kLineSearchFailed) {
-    alpha_ *= settings_.gamma;
+    alpha_ *= settings_.interpolate_backtracking ? 0.1 : settings_.gamma;
     if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
   }
   r.iteration = iteration_;
@@ -210,30 +319,30 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.alpha = alpha_;
   r.cost = r.breakdown.total;
   r.nominal_cost = nominal_cost_;
-  // (36) reference: I^i, or with a non-monotone memory the largest of the remembered costs.
-  r.expected_nominal_cost = *std::max_element(cost_memory_.begin(), cost_memory_.end());
-  if (settings_.initial_state_correction && measured.x0.size() == nominal_.x0.size()) {
-    // Second-order prediction of the nominal's cost from the trial's initial state.
-    const Eigen::Index n0 = nominal_.x0.size();
-    const Vector dx0 = measured.x0 - nominal_.x0;
-    const auto P = pass_.P(0, 0);
-    const auto p = pass_.p(0, 0);
-    r.expected_nominal_cost += p.head(n0).dot(dx0) +
-                               0.5 * dx0.dot(P.topLeftCorner(n0, n0) * dx0);
-  }
-  r.decrease = r.cost - r.expected_nominal_cost;
+  r.decrease = r.cost - nominal_cost_;
   const Vector dT = measured.T - nominal_.T;
   r.step = InputDistance(measured, nominal_) + dT.squaredNorm();
+  // The predicted change: alpha on the feed-forward of the u-part, the (31) model for T.
+  const double a = alpha_;
+  r.predicted = a * pass_.predicted_linear() + 0.5 * a * a * pass_.predicted_quadratic() +
+                switching_step_.model_change;
   trial_pending_ = false;
   if (status_ == LearnerStatus::kLineSearchFailed) {  // terminated: only report
     r.iteration = iteration_;
     r.status = status_;
+    r.optimality = optimality_.total;
     return r;
   }
-  r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step;
+  if (settings_.acceptance == Acceptance::kSufficientDecrease) {
+    r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step;
+  } else {
+    // Armijo on the predicted change; a step predicted not to decrease the cost (rounding
+    // level) is accepted only if the measured cost did not rise.
+    r.accepted = std::isfinite(r.cost) &&
+                 (r.predicted < 0 ? r.decrease <= settings_.c * r.predicted : r.decrease <= 0);
+  }
+  if (r.accepted && !AdoptTrial(measured, direction_plant, r.cost)) r.accepted = false;
   if (r.accepted) {
-    rejections_ = 0;
-    AdoptTrial(measured, direction_plant, r.cost);
     ++iteration_;
     step_history_.push_back(r.step);
     accepted_ = active_;
@@ -241,29 +350,28 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     alpha_ = settings_.reset_alpha_on_accept
                  ? settings_.alpha_initial
                  : std::min(settings_.alpha_initial, alpha_ / settings_.gamma);
-    const int n = static_cast<int>(step_history_.size());
-    bool converged = n >= settings_.delta_i;
-    for (int i = std::max(0, n - settings_.delta_i); i < n && converged; ++i) {
-      converged = step_history_[i] <= settings_.epsilon;
-    }
-    status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
+    // Levenberg-Marquardt: the regularization shrinks after a success (to the floor).
+    mu_ = std::max(settings_.regularization_min, 0.1 * mu_);
+    if (mu_ < 1e-6 * luu_scale_) mu_ = settings_.regularization_min;
+    UpdateConvergence();
   } else {
-    ++rejections_;
-    alpha_ *= settings_.gamma;
-    if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
-    if (settings_.rebaseline_after > 0 && rejections_ >= settings_.rebaseline_after &&
-        std::isfinite(r.cost) && status_ == LearnerStatus::kRunning) {
-      // Restart Algorithm 1 from this trial: it is the new x^i with its measured cost.
-      cost_memory_.clear();
-      AdoptTrial(measured, direction_plant, r.cost);
-      accepted_ = active_;
-      active_ = 1 - active_;
-      rejections_ = 0;
-      r.rebaselined = true;
+    double next = settings_.gamma * alpha_;
+    if (settings_.interpolate_backtracking && std::isfinite(r.decrease)) {
+      // The quadratic through phi(0) = 0, phi'(0) = slope and phi(alpha) = decrease.
+      const double slope = pass_.predicted_linear() +
+                           (alpha_ > 0 ? switching_step_.model_change / alpha_ : 0.0);
+      const double curvature = r.decrease - slope * alpha_;
+      if (slope < 0 && curvature > 0) {
+        next = -slope * alpha_ * alpha_ / (2.0 * curvature);
+      }
+      next = std::min(std::max(next, 0.1 * alpha_), settings_.gamma * alpha_);
     }
+    alpha_ = next;
+    if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
   }
   r.iteration = iteration_;
   r.status = status_;
+  r.optimality = optimality_.total;
   return r;
 }
 
@@ -281,18 +389,18 @@ SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const Cons
   }
   SolveResult result;
   result.cost_history.push_back(nominal_cost_);
-  while (trials_ < settings_.max_trials) {
+  while (status_ == LearnerStatus::kRunning && trials_ < settings_.max_trials) {
     OnlineController& policy = NextTrial();
     cost_plant.Run(x0, policy, &measured);
     const TrialResult r = CompleteTrial(measured, same ? nullptr : &direction_plant);
     if (r.accepted) result.cost_history.push_back(nominal_cost_);
-    if (status_ != LearnerStatus::kRunning) break;
   }
   result.status = status_ == LearnerStatus::kRunning ? LearnerStatus::kMaxTrials : status_;
   result.trials = trials_;
   result.iterations = iteration_;
   result.cost = nominal_cost_;
   result.T = nominal_.T;
+  result.optimality = optimality_;
   return result;
 }
 

@@ -41,10 +41,6 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
     throw InvalidArgument("OnlineController::Allocate: max_samples = " +
                           std::to_string(max_samples) + ", expected >= 2");
   }
-  if (!(settings.feedback_scale >= 0.0) || !std::isfinite(settings.feedback_scale)) {
-    throw InvalidArgument("OnlineControllerSettings: feedback_scale = " +
-                          std::to_string(settings.feedback_scale) + ", expected finite and >= 0");
-  }
   const SwitchedSystem& sys = *problem.system;
   CheckStateFeedbackScale(settings.state_feedback_scale, sys);
   problem_ = &problem;
@@ -67,8 +63,7 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   u_.setZero(m_, max_samples);
   Kx_.setZero(m_ * n_max_, max_samples);
   c_.setZero(m_, max_samples);
-  cff_.setZero(m_, max_samples);
-  luu_.setZero(m_ * m_, max_samples);
+  huu_.setZero(m_ * m_, max_samples);
   qp_ = BoxQP(m_, settings.qp);
   dx_.setZero(n_max_);
   xnom_.setZero(n_max_);
@@ -78,8 +73,6 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   lo_.setZero(m_);
   hi_.setZero(m_);
   du_.setZero(m_);
-  mu_.setZero(m_);
-  inv_range_sq_ = InverseSquaredInputRanges(problem.bounds);
   loaded_ = false;
 }
 
@@ -122,6 +115,9 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
                           " samples, more than max_samples = " + std::to_string(max_samples_));
   }
   alpha_ = alpha;
+  // The convention of the equation: alpha on all of b (the paper) or on the feed-forward.
+  const bool scale_all = pass.alpha_scales_feedback();
+  feedback_factor_ = scale_all ? alpha : 1.0;
   dT_ = dT;
   nominal_T_ = nominal.T;
   planned_T_ = nominal.T + dT;
@@ -143,10 +139,9 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
       const auto gain = pass.Gain(k, j);
       Eigen::Map<Matrix>(Kx_.col(s).data(), m_, n) = gain.leftCols(n);
       auto c = c_.col(s);
-      c = pass.Feedforward(k, j);
-      cff_.col(s) = c;
-      c.noalias() += gain.rightCols(K_) * dT;
-      luu_.col(s) = Eigen::Map<const Vector>(pass.Luu(k, j).data(), m_ * m_);
+      c = alpha * pass.Feedforward(k, j);
+      c.noalias() += (scale_all ? alpha : 1.0) * (gain.rightCols(K_) * dT);
+      huu_.col(s) = Eigen::Map<const Vector>(pass.Hessian(k, j).data(), m_ * m_);
     }
   }
   loaded_ = true;
@@ -221,30 +216,17 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   // dx and b of (34): b = (1-w)(Kx_0 dx + c_0) + w (Kx_1 dx + c_1).
   auto dx = dx_.head(n);
   dx = x_measured - ((1.0 - w) * x_.col(s0).head(n) + w * x_.col(s1).head(n));
-  if (!settings_.state_feedback_scale.empty()) {
-    if (static_cast<int>(settings_.state_feedback_scale.size()) != K_ ||
-        settings_.state_feedback_scale[static_cast<size_t>(k)].size() != n) {
-      throw InvalidArgument("OnlineController::Step: state_feedback_scale does not match the "
-                            "modes' state dimensions");
-    }
+  if (!settings_.state_feedback_scale.empty()) {  // validated by Allocate/SetStateFeedbackScale
     dx.array() *= settings_.state_feedback_scale[static_cast<size_t>(k)].array();
   }
   Eigen::Map<const Matrix> K0(Kx_.col(s0).data(), m_, n);
   Eigen::Map<const Matrix> K1(Kx_.col(s1).data(), m_, n);
   b_ = (1.0 - w) * c_.col(s0) + w * c_.col(s1);
-  b_.noalias() += ((1.0 - w) * settings_.feedback_scale) * K0 * dx;
-  b_.noalias() += (w * settings_.feedback_scale) * K1 * dx;
-  if (settings_.alpha_scales_feedback) {
-    b_ *= alpha_;  // (33) as printed
-  } else {
-    b_.noalias() -= (1.0 - alpha_) * ((1.0 - w) * cff_.col(s0) + w * cff_.col(s1));
-  }
-  // H = L_uu(tau) + diag(mu).
-  H_ = (1.0 - w) * Eigen::Map<const Matrix>(luu_.col(s0).data(), m_, m_) +
-       w * Eigen::Map<const Matrix>(luu_.col(s1).data(), m_, m_);
-  RegularizationDiagonal(settings_.regularization_scaling, settings_.regularization, H_,
-                         inv_range_sq_, mu_);
-  H_.diagonal() += mu_;
+  b_.noalias() += ((1.0 - w) * feedback_factor_) * K0 * dx;
+  b_.noalias() += (w * feedback_factor_) * K1 * dx;
+  // H = L_uu(tau) + mu I, as the backward pass assumed.
+  H_ = (1.0 - w) * Eigen::Map<const Matrix>(huu_.col(s0).data(), m_, m_) +
+       w * Eigen::Map<const Matrix>(huu_.col(s1).data(), m_, m_);
   lo_ = umin - unom_;
   hi_ = umax - unom_;
   // The nominal can sit slightly outside the box (interpolation, measured inputs).

@@ -84,19 +84,6 @@ TEST_F(ScenarioTest, ParsesEveryElementAndResolvesPathsAgainstTheFile) {
   EXPECT_DOUBLE_EQ(s.forward_speed, 0.5);
 }
 
-TEST_F(ScenarioTest, LearningRegularizationScaling) {
-  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
-  Scenario s = LoadScenario(Write(Fill(fmt, "regularization_scaling='per_input'")));
-  ASSERT_TRUE(s.learning.per_input_regularization.has_value());
-  EXPECT_TRUE(*s.learning.per_input_regularization);
-  s = LoadScenario(Write(Fill(fmt, "regularization_scaling='scalar'")));
-  ASSERT_TRUE(s.learning.per_input_regularization.has_value());
-  EXPECT_FALSE(*s.learning.per_input_regularization);
-  EXPECT_FALSE(LoadScenario(Write(Fill(fmt, ""))).learning.per_input_regularization.has_value());
-  ExpectError(Fill(fmt, "regularization_scaling='diag'"),
-              {"<learning>", "regularization_scaling=\"diag\"", "per_input"});
-}
-
 TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
   const Scenario s = LoadScenario(Write(Fill(fmt, "cyclic_value='0.9' alpha_initial='0.3'")));

@@ -84,6 +84,7 @@ void LqErrors(const ScalarLqSetup& setup, const Trajectory& traj, BackwardIntegr
               double* eP, double* ep) {
   BackwardPass pass;
   BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kLyapunov;
   settings.integrator = integrator;
   pass.Allocate(setup.problem, traj.total_samples(), settings);
   pass.Run(traj);
@@ -102,7 +103,7 @@ TEST(BackwardPass, ScalarLqMatchesClosedForm) {
   LqErrors(setup, setup.Exact(481), BackwardIntegrator::kRk4, &eP2, &ep2);
   // P has constant coefficients here: RK4 is (nearly) exact.
   EXPECT_LT(eP, 1e-9);
-  // p is driven by L_z = D q x(tau), interpolated linearly between samples: second order.
+  // p is driven by L_z = D q x(tau), held at its interval-midpoint value: second order.
   EXPECT_LT(ep, 1e-5);
   EXPECT_GT(ep / ep2, 3.5);
   // Midpoint (RK2) is second order in P as well.
@@ -117,16 +118,31 @@ TEST(BackwardPass, ScalarLqMatchesClosedForm) {
 TEST(BackwardPass, ScalarLqTimeGradientIsP2) {
   const ScalarLqSetup setup{ScalarLq{}};
   const Trajectory traj = setup.Exact(481);
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kLyapunov;
   BackwardPass pass;
-  pass.Allocate(setup.problem, 481);
+  pass.Allocate(setup.problem, 481, settings);
   pass.Run(traj);
   EXPECT_NEAR(pass.p2_initial()(0), setup.lq.dJdT(), 1e-5 * std::abs(setup.lq.dJdT()));
-  // Gain and feed-forward of (34): L_uz + F_u^T P and L_u + F_u^T p at t = 0.
+  EXPECT_EQ(pass.gradient_T()(0), pass.p2_initial()(0));  // p is the adjoint here
+  // Gain, feed-forward and Hessian of (34) for interval 0 (u_0 held on [t_0, t_1]): at the
+  // interval's midpoint, L_uz + F_u^T P, L_u + F_u^T p, L_uu (P, p to second order the means
+  // of the samples' values).
   const double D = setup.lq.T;
-  EXPECT_NEAR(pass.Feedforward(0, 0)(0),
-              D * (setup.lq.r * setup.lq.u0 + setup.lq.b * pass.p(0, 0)(0)), 1e-12);
-  EXPECT_NEAR(pass.Gain(0, 0)(0, 0), D * setup.lq.b * pass.P(0, 0)(0, 0), 1e-12);
-  EXPECT_NEAR(pass.Luu(0, 0)(0, 0), D * setup.lq.r, 1e-12);
+  const double p_mid = 0.5 * (pass.p(0, 0)(0) + pass.p(0, 1)(0));
+  const double P_mid = 0.5 * (pass.P(0, 0)(0, 0) + pass.P(0, 1)(0, 0));
+  EXPECT_NEAR(pass.Feedforward(0, 0)(0), D * (setup.lq.r * setup.lq.u0 + setup.lq.b * p_mid),
+              1e-6 * std::abs(p_mid));
+  EXPECT_NEAR(pass.Gain(0, 0)(0, 0), D * setup.lq.b * P_mid, 1e-5 * P_mid);  // O(h^2), h = 1/480
+  EXPECT_EQ(pass.Hessian(0, 0)(0, 0), D * setup.lq.r);
+  EXPECT_EQ(pass.Gradient(0, 0)(0), pass.Feedforward(0, 0)(0));
+  // The default (box-aware Riccati) pass has another p but the same gradient adjoint.
+  BackwardPass riccati;
+  riccati.Allocate(setup.problem, 481);
+  riccati.Run(traj);
+  EXPECT_NEAR(riccati.gradient_T()(0), setup.lq.dJdT(), 1e-5 * std::abs(setup.lq.dJdT()));
+  EXPECT_NEAR(riccati.Gradient(0, 7)(0), pass.Gradient(0, 7)(0), 1e-12);
+  EXPECT_GT(std::abs(riccati.p(0, 0)(0) - pass.p(0, 0)(0)), 0.1);
 }
 
 TEST(BackwardPass, PreviousDuTermMatchesIndependentQuadrature) {
@@ -136,14 +152,17 @@ TEST(BackwardPass, PreviousDuTermMatchesIndependentQuadrature) {
   const int N = 481;
   const Trajectory traj = setup.Exact(N);
   const double du = 0.3;
-  BackwardPassSettings with;
+  BackwardPassSettings without;
+  without.equation = BackwardEquation::kLyapunov;
+  without.integrator = BackwardIntegrator::kRk4;
+  BackwardPassSettings with = without;
   with.use_previous_du = true;
   BackwardPass a, b;
-  a.Allocate(setup.problem, N);
+  a.Allocate(setup.problem, N, without);
   b.Allocate(setup.problem, N, with);
   a.Run(traj);
   const Matrix du_prev = Matrix::Constant(1, N, du);
-  b.Run(traj, &du_prev);
+  b.Run(traj, 0.0, &du_prev);
   const ScalarLq& lq = setup.lq;
   for (int j : {0, 120, 300}) {
     const double t = traj.modes[0].t(j);
@@ -205,17 +224,15 @@ double SimulatedCost(const NonlinearSetup& setup, const Vector& durations, doubl
   return PerturbedCost(setup.problem, true, BaseInput, durations, eps, out);
 }
 
-// int (L_u + F_u^T p) . v dtau, the backward pass's directional derivative along Direction.
+// sum_j (tau_{j+1} - tau_j) Gradient(k, j) . v(tau_j): the backward pass's directional
+// derivative along Direction, with v held on each sample interval as the plant holds it.
 double PredictedDirectionalDerivative(const BackwardPass& pass, int K) {
   double predicted = 0;
   for (int k = 0; k < K; ++k) {
-    double prev = 0;
-    for (int j = 0; j < pass.num_samples(k); ++j) {
+    for (int j = 0; j + 1 < pass.num_samples(k); ++j) {
       Vector v(2);
       Direction(k, pass.tau(k, j), v);
-      const double cur = pass.Feedforward(k, j).dot(v);
-      if (j > 0) predicted += 0.5 * (pass.tau(k, j) - pass.tau(k, j - 1)) * (prev + cur);
-      prev = cur;
+      predicted += (pass.tau(k, j + 1) - pass.tau(k, j)) * pass.Gradient(k, j).dot(v);
     }
   }
   return predicted;
@@ -242,10 +259,10 @@ TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
       Dm(k + 1) += e;
     }
     const double fd = (SimulatedCost(setup, Dp, 0) - SimulatedCost(setup, Dm, 0)) / (2 * e);
-    EXPECT_NEAR(pass.p2_initial()(k), fd, 2e-3 * std::max(1.0, std::abs(fd))) << "dJ/dT_" << k;
+    EXPECT_NEAR(pass.gradient_T()(k), fd, 2e-3 * std::max(1.0, std::abs(fd))) << "dJ/dT_" << k;
   }
 
-  // Directional derivative w.r.t. u(.) along v(tau): int (L_u + F_u^T p) . v dtau.
+  // Directional derivative w.r.t. u(.) along v(tau): int (L_u + F_u^T lambda) . v dtau.
   const double predicted = PredictedDirectionalDerivative(pass, 3);
   const double eu = 1e-4;
   const double fd_u = (SimulatedCost(setup, D, eu) - SimulatedCost(setup, D, -eu)) / (2 * eu);
@@ -357,114 +374,106 @@ TEST(BackwardPass, TerminalEventIsTheIdentityWithoutAGuardGradient) {
   EXPECT_EQ(a.Feedforward(0, 0), b.Feedforward(0, 0));
 }
 
-TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
-  // dP/dt = -(2 a P + q - P^2 b^2 / r), P(T) = s, integrated independently with fine RK4.
-  const ScalarLqSetup setup{ScalarLq{}};
-  const ScalarLq& lq = setup.lq;
-  const Trajectory traj = setup.Exact(481);
-  BackwardPassSettings settings;
-  settings.equation = BackwardEquation::kRiccati;
-  settings.riccati_regularization = 0;
-  BackwardPass pass;
-  pass.Allocate(setup.problem, 481, settings);
-  pass.Run(traj);
-  auto f = [&](double P) { return 2 * lq.a * P + lq.q - P * P * lq.b * lq.b / lq.r; };
+// The scalar LQ problem without input bounds (the Riccati tests check the unconstrained
+// equation; the box-aware one is tested below).
+struct UnboundedScalarLq : ScalarLqSetup {
+  UnboundedScalarLq() : ScalarLqSetup(ScalarLq{}) {
+    problem.bounds.u_min(0) = -std::numeric_limits<double>::infinity();
+    problem.bounds.u_max(0) = std::numeric_limits<double>::infinity();
+  }
+};
+
+// P(0) of dP/dt = -(2 a P + q - P^2 b^2 / r_eff) from P(T) = s, fine RK4 (100 steps per
+// sample interval of a 481-sample grid), compared with the pass at every 100th fine step.
+void ExpectScalarRiccati(const ScalarLq& lq, double r_eff, const BackwardPass& pass) {
+  auto f = [&](double P) { return 2 * lq.a * P + lq.q - P * P * lq.b * lq.b / r_eff; };
   double P = lq.s;
-  const int M = 48000;  // 100 fine steps per sample interval
+  const int M = 48000;
   const double h = lq.T / M;
   for (int i = M; i > 0; --i) {
-    if (i % 100 == 0) {
-      const int j = i / 100;
-      EXPECT_NEAR(pass.P(0, j)(0, 0), P, 1e-7 * P) << "j " << j;
-    }
+    if (i % 4000 == 0) EXPECT_NEAR(pass.P(0, i / 100)(0, 0), P, 1e-7 * P) << "j " << i / 100;
     const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2), k4 = f(P + h * k3);
     P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
   }
   EXPECT_NEAR(pass.P(0, 0)(0, 0), P, 1e-7 * P);
-  // kRiccatiFeedback (and the legacy switch `riccati`) has the same P but keeps the gradient
-  // adjoint p of the Lyapunov form.
-  BackwardPassSettings fb;
-  fb.riccati = true;
-  fb.riccati_regularization = 0;
-  BackwardPass feedback, lyapunov;
-  feedback.Allocate(setup.problem, 481, fb);
-  lyapunov.Allocate(setup.problem, 481);
-  feedback.Run(traj);
-  lyapunov.Run(traj);
-  for (int j : {0, 200, 480}) {
-    EXPECT_NEAR(feedback.P(0, j)(0, 0), pass.P(0, j)(0, 0), 1e-12 * pass.P(0, j)(0, 0));
-    EXPECT_EQ(feedback.p(0, j), lyapunov.p(0, j));
-  }
-  EXPECT_NE(pass.p(0, 0)(0), lyapunov.p(0, 0)(0));  // kRiccati changes p
 }
 
-TEST(BackwardPass, PerInputRegularizationEntersTheRiccatiEquation) {
-  // kRiccati with riccati_regularization reg: H = L_uu + mu with L_uu = D r (tau units), so in
-  // time the Riccati equation uses r_eff = H / D:
-  //   kPerInput: mu = reg (D r + s^-2), s = u_max - u_min = 20 -> r_eff = r + reg (r + 1/(D s^2))
-  //   kScalar:   mu = reg (1 + D r)                             -> r_eff = r + reg (1 + D r) / D
-  // Each is integrated independently with fine RK4 and compared with the pass.
-  const ScalarLqSetup setup{ScalarLq{}};
-  const ScalarLq& lq = setup.lq;
+TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
+  const UnboundedScalarLq setup;
   const Trajectory traj = setup.Exact(481);
-  const double reg = 0.5, D = lq.T, s = 20.0;
-  for (const auto scaling : {RegularizationScaling::kPerInput, RegularizationScaling::kScalar}) {
-    const bool per_input = scaling == RegularizationScaling::kPerInput;
-    const double r_eff =
-        per_input ? lq.r + reg * (lq.r + 1.0 / (D * s * s)) : lq.r + reg * (1.0 + D * lq.r) / D;
-    BackwardPassSettings settings;
-    settings.equation = BackwardEquation::kRiccati;
-    settings.riccati_regularization = reg;
-    settings.regularization_scaling = scaling;
-    BackwardPass pass;
-    pass.Allocate(setup.problem, 481, settings);
-    pass.Run(traj);
-    auto f = [&](double P) { return 2 * lq.a * P + lq.q - P * P * lq.b * lq.b / r_eff; };
-    double P = lq.s;
-    const int M = 48000;
-    const double h = lq.T / M;
-    for (int i = M; i > 0; --i) {
-      if (i % 4000 == 0) {
-        EXPECT_NEAR(pass.P(0, i / 100)(0, 0), P, 1e-7 * P) << "per_input " << per_input;
-      }
-      const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2),
-                   k4 = f(P + h * k3);
-      P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
-    }
-    EXPECT_NEAR(pass.P(0, 0)(0, 0), P, 1e-7 * P) << "per_input " << per_input;
+  BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kRiccati;
+  settings.integrator = BackwardIntegrator::kRk4;
+  BackwardPass pass;
+  pass.Allocate(setup.problem, 481, settings);
+  pass.Run(traj);
+  ExpectScalarRiccati(setup.lq, setup.lq.r, pass);
+  // The midpoint integrator (the default) agrees to second order.
+  BackwardPass mid;
+  mid.Allocate(setup.problem, 481);
+  mid.Run(traj);
+  EXPECT_NEAR(mid.P(0, 0)(0, 0), pass.P(0, 0)(0, 0), 1e-4 * pass.P(0, 0)(0, 0));
+  // kRiccati changes p, not the gradient adjoint of the Lyapunov form.
+  BackwardPassSettings lyap_settings;
+  lyap_settings.equation = BackwardEquation::kLyapunov;
+  BackwardPass lyapunov;
+  lyapunov.Allocate(setup.problem, 481, lyap_settings);
+  lyapunov.Run(traj);
+  EXPECT_NE(pass.p(0, 0)(0), lyapunov.p(0, 0)(0));
+  for (int j : {0, 200, 479}) {
+    EXPECT_NEAR(mid.Gradient(0, j)(0), lyapunov.Gradient(0, j)(0), 1e-12) << "j " << j;
   }
 }
 
-TEST(BackwardPass, RegularizationDiagonalScalarAndPerInput) {
-  Bounds b;
-  b.u_min = Vector(4);
-  b.u_max = Vector(4);
-  b.u_min << -1, 0, 3, -std::numeric_limits<double>::infinity();
-  b.u_max << 1, 10, 3, 0;
-  const Vector inv = InverseSquaredInputRanges(b);
-  ASSERT_EQ(inv.size(), 4);
-  EXPECT_DOUBLE_EQ(inv(0), 0.25);
-  EXPECT_DOUBLE_EQ(inv(1), 0.01);
-  EXPECT_DOUBLE_EQ(inv(2), 1.0);  // zero range
-  EXPECT_DOUBLE_EQ(inv(3), 1.0);  // infinite range
-  Matrix luu(4, 4);
-  luu << 2, 0.1, 0, 0,  //
-      0.1, -3, 0, 0,    //
-      0, 0, 1e-6, 0,    //
-      0, 0, 0, 0.5;
-  Vector mu(4);
-  RegularizationDiagonal(RegularizationScaling::kScalar, 0.1, luu, inv, mu);
-  for (int i = 0; i < 4; ++i) EXPECT_DOUBLE_EQ(mu(i), 0.1 * (1 + 3));
-  RegularizationDiagonal(RegularizationScaling::kPerInput, 0.1, luu, inv, mu);
-  EXPECT_DOUBLE_EQ(mu(0), 0.1 * (2 + 0.25));
-  EXPECT_DOUBLE_EQ(mu(1), 0.1 * (3 + 0.01));
-  EXPECT_DOUBLE_EQ(mu(2), 0.1 * (1e-6 + 1));
-  EXPECT_DOUBLE_EQ(mu(3), 0.1 * (0.5 + 1));
-  Vector wrong(3);
-  EXPECT_THROW(RegularizationDiagonal(RegularizationScaling::kPerInput, 0.1, luu, inv, wrong),
-               InvalidArgument);
-  b.u_max.resize(3);
-  EXPECT_THROW(InverseSquaredInputRanges(b), InvalidArgument);
+TEST(BackwardPass, RiccatiIsBoxAware) {
+  // The nominal input sits on its upper bound and the gradient pushes it out (p < -r u0 / b
+  // everywhere for x0 = -1): the full step is clamped on every interval, so the clamped input
+  // gives no feedback and the box-aware Riccati pass is exactly the Lyapunov pass (same P, p).
+  // With the bound far away the same nominal gives the unconstrained Riccati solution.
+  ScalarLq lq;
+  lq.x0 = -1.0;
+  ScalarLqSetup clamped{lq};
+  clamped.problem.bounds.u_max(0) = lq.u0;
+  const Trajectory traj = clamped.Exact(241);
+  BackwardPassSettings lyap_settings;
+  lyap_settings.equation = BackwardEquation::kLyapunov;
+  BackwardPass box, lyapunov;
+  box.Allocate(clamped.problem, 241);
+  lyapunov.Allocate(clamped.problem, 241, lyap_settings);
+  box.Run(traj);
+  lyapunov.Run(traj);
+  for (int j = 0; j < 240; ++j) {
+    ASSERT_LT(box.Feedforward(0, j)(0), 0.0) << "the gradient pushes u above u_max at j " << j;
+    EXPECT_EQ(box.Step(0, j)(0), 0.0) << "j " << j;
+  }
+  for (int j : {0, 120, 239}) {
+    EXPECT_NEAR(box.P(0, j)(0, 0), lyapunov.P(0, j)(0, 0), 1e-12 * lyapunov.P(0, j)(0, 0));
+    EXPECT_NEAR(box.p(0, j)(0), lyapunov.p(0, j)(0), 1e-12 * std::abs(lyapunov.p(0, j)(0)));
+  }
+  EXPECT_EQ(box.predicted_linear(), 0.0);  // nothing to gain inside the box
+  ScalarLqSetup free{lq};
+  BackwardPass riccati;
+  riccati.Allocate(free.problem, 241);
+  riccati.Run(traj);
+  EXPECT_GT(lyapunov.P(0, 0)(0, 0) - riccati.P(0, 0)(0, 0), 0.5 * riccati.P(0, 0)(0, 0));
+  EXPECT_LT(riccati.predicted_linear(), 0.0);
+}
+
+TEST(BackwardPass, RegularizationEntersAsMu) {
+  // H = L_uu + mu with L_uu = D r (tau units): in time the Riccati equation uses
+  // r_eff = r + mu / D, integrated independently and compared with the pass.
+  const UnboundedScalarLq setup;
+  const Trajectory traj = setup.Exact(481);
+  const double mu = 0.4;
+  BackwardPassSettings settings;
+  settings.integrator = BackwardIntegrator::kRk4;
+  BackwardPass pass;
+  pass.Allocate(setup.problem, 481, settings);
+  pass.Run(traj, mu);
+  EXPECT_EQ(pass.regularization(), mu);
+  EXPECT_DOUBLE_EQ(pass.Hessian(0, 3)(0, 0), setup.lq.T * setup.lq.r + mu);
+  ExpectScalarRiccati(setup.lq, setup.lq.r + mu / setup.lq.T, pass);
+  EXPECT_THROW(pass.Run(traj, -1.0), InvalidArgument);
 }
 
 TEST(BackwardPass, PsdSwitchingHessiansProjectsAnIndefiniteTerminalHessian) {
@@ -476,11 +485,14 @@ TEST(BackwardPass, PsdSwitchingHessiansProjectsAnIndefiniteTerminalHessian) {
   zero.s = 0.0;
   const ScalarLqSetup setup{negative};
   const Trajectory traj = setup.Exact(241);
-  BackwardPassSettings psd;
+  BackwardPassSettings plain;
+  plain.equation = BackwardEquation::kLyapunov;
+  plain.integrator = BackwardIntegrator::kRk4;  // P has constant coefficients: RK4 is exact
+  BackwardPassSettings psd = plain;
   psd.psd_switching_hessians = true;
   BackwardPass projected, exact;
   projected.Allocate(setup.problem, 241, psd);
-  exact.Allocate(setup.problem, 241);
+  exact.Allocate(setup.problem, 241, plain);
   projected.Run(traj);
   exact.Run(traj);
   for (int j : {0, 120, 240}) {
@@ -505,23 +517,27 @@ TEST(BackwardPass, RunDoesNotAllocate) {
   const Trajectory traj = setup.Exact(1000);
   BackwardPass pass;
   BackwardPassSettings settings;
+  settings.equation = BackwardEquation::kLyapunov;
   settings.use_previous_du = true;
   pass.Allocate(setup.problem, 2000, settings);
   const Matrix du = Matrix::Constant(1, 1000, 0.1);
-  pass.Run(traj, &du);
+  pass.Run(traj, 0.0, &du);
   {
     MallocCounter counter;
-    pass.Run(traj, &du);
-    EXPECT_EQ(counter.count(), 0);
+    pass.Run(traj, 0.0, &du);
+    EXPECT_EQ(counter.count(), 0) << "kLyapunov";
   }
-  BackwardPass riccati;
-  BackwardPassSettings rs;
-  rs.equation = BackwardEquation::kRiccati;
-  riccati.Allocate(setup.problem, 2000, rs);
-  riccati.Run(traj);
-  MallocCounter counter;
-  riccati.Run(traj);
-  EXPECT_EQ(counter.count(), 0) << "kRiccati";
+  // The default (box-aware kRiccati, finite bounds: a box QP per interval), midpoint and RK4.
+  for (const auto integrator : {BackwardIntegrator::kMidpoint, BackwardIntegrator::kRk4}) {
+    BackwardPass riccati;
+    BackwardPassSettings rs;
+    rs.integrator = integrator;
+    riccati.Allocate(setup.problem, 2000, rs);
+    riccati.Run(traj, 0.1);
+    MallocCounter counter;
+    riccati.Run(traj, 0.1);
+    EXPECT_EQ(counter.count(), 0) << "kRiccati";
+  }
 }
 
 // A scalar LQ "cycle": one mode of duration T, xdot = a x + b u, l = 1/2 (q x^2 + r u^2), no
@@ -554,7 +570,7 @@ struct CyclicLq {
   static BackwardPassSettings Settings(double cyclic_value) {
     BackwardPassSettings settings;
     settings.equation = BackwardEquation::kRiccati;
-    settings.riccati_regularization = 0;
+    settings.integrator = BackwardIntegrator::kRk4;
     settings.cyclic_value = cyclic_value;
     settings.cyclic_max_sweeps = 200;
     settings.cyclic_tolerance = 1e-12;

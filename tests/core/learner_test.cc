@@ -111,8 +111,7 @@ LearnerSettings TestSettings() {
   return s;
 }
 
-// 0: the paper's (30) with the exact adjoint (default); 1: (30) with the du^{i-1} term;
-// 2: the Riccati-feedback extension (P from the Riccati equation, p the gradient adjoint).
+// 0: the default preset; 1: the paper preset.
 class TwoModeLqTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
@@ -129,22 +128,18 @@ TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
   ps.dt = 1e-3;
   ModelPlant plant(p.problem, ps);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
-  settings.backward.use_previous_du = GetParam() == 1;
-  if (GetParam() == 2) {
-    settings.backward.equation = BackwardEquation::kRiccatiFeedback;
-    settings.backward.riccati_regularization = settings.controller.regularization;
-  }
+  LearnerSettings settings = GetParam() == 1 ? LearnerSettings::Paper() : LearnerSettings{};
+  settings.max_trials = 1500;
+  settings.max_samples = 10000;
   Learner learner(p.problem, settings);
   const SolveResult result = learner.Solve(plant, plant, lq.x0, initial);
   std::printf("status %d trials %d iterations %d cost %.6f T %.4f %.4f | optimum D %.3f %.3f cost %.6f\n",
               static_cast<int>(result.status), result.trials, result.iterations, result.cost,
               result.T(0), result.T(1) - result.T(0), coarse.D0, coarse.D1, coarse.cost);
-  if (GetParam() != 1) {
+  if (GetParam() == 0) {
     EXPECT_EQ(result.status, LearnerStatus::kConverged);
+    EXPECT_LE(result.trials, 30);
   } else {
-    // The paper's variant with the du^{i-1} term in (30) reaches the same point but ends with
-    // a failed line search more often than the exact adjoint (README, design notes).
     EXPECT_NE(result.status, LearnerStatus::kMaxTrials);
   }
   EXPECT_NEAR(result.T(0), coarse.D0, 0.02);
@@ -201,8 +196,10 @@ TEST(Learner, DataDrivenBeatsModelBasedOnAnInexactModel) {
   EXPECT_LE(c.alg1, c.ocfb);
   EXPECT_LE(c.mrl, c.ocfb);
   // The model-based policy is clearly worse on the real plant; Algorithm 1 is close to the
-  // true optimum although its derivatives come from the wrong model.
-  EXPECT_GT(c.ocfb - true_opt.cost, 3.0 * (c.alg1 - true_opt.cost));
+  // true optimum although its derivatives come from the wrong model. (With the box-aware
+  // Riccati gains of the default preset OC-FB's feedback corrects more of the model error than
+  // the Lyapunov-based law did: its excess fell from 0.051 to 0.029, Algorithm 1's is 0.013.)
+  EXPECT_GT(c.ocfb - true_opt.cost, 2.0 * (c.alg1 - true_opt.cost));
 }
 
 TEST(Learner, AllThreeMethodsAgreeWithAnExactModel) {
@@ -223,6 +220,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   LearnerSettings settings = TestSettings();
   settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
   settings.gamma = 0.5;
+  settings.interpolate_backtracking = false;
   settings.alpha_min = 0.1;
   Learner learner(p.problem, settings);
   Trajectory measured;
@@ -257,124 +255,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   other.NextTrial();
   const TrialResult aborted = other.AbortTrial();
   EXPECT_FALSE(aborted.accepted);
-  EXPECT_DOUBLE_EQ(other.alpha(), TestSettings().gamma);
-}
-
-TEST(Learner, InitialStateCorrectionPredictsTheNominalCostFromAnotherStart) {
-  // Linear dynamics, quadratic cost, the nominal inputs replayed (alpha ~ 0, paper convention):
-  // the cost from x0 + d is exactly quadratic in d with gradient p_1(0) and Hessian P_11(0), so
-  // the corrected decrease is ~0 while the plain one is the full cost difference.
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
-                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setConstant(0.3); });
-  Trajectory measured, nominal;
-  plant.Run(lq.x0, initial, &nominal);
-  const Eigen::Vector2d x1 = lq.x0 + Eigen::Vector2d(0.2, -0.3);
-  for (bool correct : {false, true}) {
-    LearnerSettings settings = TestSettings();
-    settings.alpha_initial = 1e-12;
-    settings.alpha_min = 1e-13;
-    settings.controller.alpha_scales_feedback = true;
-    settings.initial_state_correction = correct;
-    Learner learner(p.problem, settings);
-    learner.Initialize(nominal);
-    OnlineController& policy = learner.NextTrial();
-    plant.Run(x1, policy, &measured);
-    const double cost1 = EvaluateCost(p.problem, measured).total;
-    const TrialResult r = learner.CompleteTrial(measured);
-    EXPECT_NEAR(r.cost, cost1, 1e-12);
-    if (correct) {
-      EXPECT_NEAR(r.decrease, 0.0, 1e-4 * std::abs(cost1 - r.nominal_cost));
-      EXPECT_NEAR(r.expected_nominal_cost, cost1, 1e-6 * cost1);
-    } else {
-      EXPECT_DOUBLE_EQ(r.expected_nominal_cost, r.nominal_cost);
-      EXPECT_DOUBLE_EQ(r.decrease, cost1 - r.nominal_cost);
-      EXPECT_GT(std::abs(r.decrease), 0.05);
-    }
-  }
-}
-
-TEST(Learner, NonmonotoneMemoryComparesWithTheLargestRememberedCost) {
-  // Trials are data: CompleteTrial accepts any measured trajectory. Nominal costs c0 (u = 0
-  // from x0) and c1 < c0 (the learner's first trial); then a u = 0 run from s x0 whose cost is
-  // (c0 + c1) / 2: (36) as printed rejects it (it is worse than c1), a memory of 2 accepts it.
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy zero(Eigen::Vector2d(1.0, 1.0),
-                      [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
-  Trajectory run0, run_origin;
-  plant.Run(lq.x0, zero, &run0);
-  plant.Run(Eigen::Vector2d::Zero(), zero, &run_origin);
-  const double c0 = EvaluateCost(p.problem, run0).total;
-  const double rho = EvaluateCost(p.problem, run_origin).total;  // duration terms only
-  for (int memory : {1, 2}) {
-    LearnerSettings settings = TestSettings();
-    settings.c = 1e-12;
-    settings.nonmonotone_memory = memory;
-    Learner learner(p.problem, settings);
-    learner.Initialize(run0);
-    Trajectory trial1, trial2;
-    plant.Run(lq.x0, learner.NextTrial(), &trial1);
-    const TrialResult r1 = learner.CompleteTrial(trial1);
-    ASSERT_TRUE(r1.accepted);
-    const double c1 = r1.cost;
-    ASSERT_LT(c1, c0 - 0.01);
-    // u = 0 from s x0: cost rho + s^2 (c0 - rho) (linear dynamics, same durations).
-    const double s = std::sqrt((0.5 * (c0 + c1) - rho) / (c0 - rho));
-    learner.NextTrial();
-    plant.Run(s * lq.x0, zero, &trial2);
-    const TrialResult r2 = learner.CompleteTrial(trial2);
-    EXPECT_NEAR(r2.cost, 0.5 * (c0 + c1), 1e-9 * c0);
-    if (memory == 1) {
-      EXPECT_FALSE(r2.accepted);
-      EXPECT_DOUBLE_EQ(r2.expected_nominal_cost, c1);
-    } else {
-      EXPECT_TRUE(r2.accepted);
-      EXPECT_DOUBLE_EQ(r2.expected_nominal_cost, c0);
-      EXPECT_DOUBLE_EQ(learner.nominal_cost(), r2.cost);
-    }
-  }
-  LearnerSettings bad = TestSettings();
-  bad.nonmonotone_memory = 0;
-  EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
-}
-
-TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
-  settings.c = 1e6;  // every trial is rejected
-  settings.rebaseline_after = 2;
-  Learner learner(p.problem, settings);
-  Trajectory measured;
-  plant.Run(lq.x0, initial, &measured);
-  learner.Initialize(measured);
-  const double cost0 = learner.nominal_cost();
-  const Eigen::Vector2d x1(1.3, -0.4);  // a different start: a different cost
-  for (int i = 1; i <= 4; ++i) {
-    plant.Run(x1, learner.NextTrial(), &measured);
-    const double before = learner.nominal_cost();
-    const TrialResult r = learner.CompleteTrial(measured);
-    EXPECT_FALSE(r.accepted);
-    EXPECT_EQ(r.rebaselined, i % 2 == 0) << "trial " << i;
-    if (i % 2 == 0) {
-      EXPECT_EQ(learner.nominal_cost(), r.cost);
-      EXPECT_NE(r.cost, cost0);
-      EXPECT_LT((learner.nominal().x0 - x1).norm(), 1e-12);
-    } else {
-      EXPECT_EQ(learner.nominal_cost(), before);
-    }
-    EXPECT_EQ(learner.iteration(), 0);
-    EXPECT_DOUBLE_EQ(learner.alpha(), std::pow(settings.gamma, i));  // alpha is kept
-  }
-  LearnerSettings bad = TestSettings();
-  bad.rebaseline_after = -1;
-  EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
+  EXPECT_DOUBLE_EQ(other.alpha(), 0.1);  // interpolated backtracking: the smallest factor
 }
 
 TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
@@ -440,29 +321,7 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
               1e-9 * learner.nominal_cost());
 }
 
-INSTANTIATE_TEST_SUITE_P(BackwardVariants, TwoModeLqTest, ::testing::Values(0, 1, 2));
-
-// The full Riccati extension (Newton-type step) decreases the cost monotonically and fast at
-// first, but on this problem its line search stalls before the optimum (README: known gaps).
-TEST(Learner, FullRiccatiVariantDecreasesTheCost) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
-  settings.backward.equation = BackwardEquation::kRiccati;
-  settings.backward.riccati_regularization = settings.controller.regularization;
-  Learner learner(p.problem, settings);
-  const SolveResult result = learner.Solve(plant, plant, lq.x0, initial);
-  std::printf("kRiccati: status %d trials %d iterations %d cost %.6f -> %.6f\n",
-              static_cast<int>(result.status), result.trials, result.iterations,
-              result.cost_history.front(), result.cost);
-  ASSERT_GE(result.cost_history.size(), 3u);
-  for (size_t i = 1; i < result.cost_history.size(); ++i) {
-    EXPECT_LT(result.cost_history[i], result.cost_history[i - 1]);
-  }
-  EXPECT_LT(result.cost, 0.5 * result.cost_history.front());
-}
+INSTANTIATE_TEST_SUITE_P(Presets, TwoModeLqTest, ::testing::Values(0, 1));
 
 }  // namespace
 }  // namespace testing

@@ -27,7 +27,8 @@ struct ControlSetup {
   Trajectory nominal;
   BackwardPass pass;
 
-  explicit ControlSetup(int m, int n0 = 4, int n1 = 3, double umax = 1.0) {
+  explicit ControlSetup(int m, int n0 = 4, int n1 = 3, double umax = 1.0,
+                        BackwardEquation equation = BackwardEquation::kRiccati, double mu = 0.0) {
     std::mt19937 rng(1);
     std::normal_distribution<double> nd;
     auto rnd = [&](int r, int c, double s) {
@@ -62,55 +63,75 @@ struct ControlSetup {
     ModelPlant plant(problem);
     Vector x0 = Vector::Constant(n0, 0.5);
     plant.Run(x0, policy, &nominal);
-    pass.Allocate(problem, nominal.total_samples());
-    pass.Run(nominal);
+    BackwardPassSettings settings;
+    settings.equation = equation;
+    pass.Allocate(problem, nominal.total_samples(), settings);
+    pass.Run(nominal, mu);
   }
 };
 
+// b of (34) computed independently from the pass's outputs: alpha on all of b for kLyapunov,
+// on the feed-forward only for kRiccati; `scaled_dx` is the (possibly scaled) state deviation.
+Vector IndependentB(const ControlSetup& s, int k, int j, const Vector& scaled_dx, const Vector& dT,
+                    double alpha) {
+  const Matrix G = s.pass.Gain(k, j);
+  const int n = static_cast<int>(scaled_dx.size());
+  const Vector feedback = G.leftCols(n) * scaled_dx + G.rightCols(dT.size()) * dT;
+  if (s.pass.settings().equation == BackwardEquation::kLyapunov) {
+    return alpha * (feedback + s.pass.Feedforward(k, j));
+  }
+  return feedback + alpha * s.pass.Feedforward(k, j);
+}
+
 
 TEST(OnlineController, StepSolvesEquations33And34AtSamples) {
-  ControlSetup s(3);
-  const double alpha = 0.7;
-  Vector dT(2);
-  dT << 0.02, -0.01;
-  OnlineController ctrl;
-  ctrl.Allocate(s.problem, s.nominal.total_samples());
-  ctrl.Load(s.nominal, s.pass, alpha, dT);
-  EXPECT_NEAR(ctrl.PlannedDuration(0), s.nominal.T(0) + 0.02, 1e-12);
-  EXPECT_NEAR(ctrl.PlannedDuration(1), s.nominal.T(1) - s.nominal.T(0) - 0.03, 1e-12);
-  std::mt19937 rng(4);
-  std::normal_distribution<double> nd;
-  int active_cases = 0;
-  for (int k = 0; k < 2; ++k) {
-    const int n = s.sys->state_dim(k);
-    for (int j : {0, 5, 77, s.pass.num_samples(k) - 1}) {
-      const double tau = s.pass.tau(k, j);
-      const double t = (tau - k) * ctrl.PlannedDuration(k);
-      Vector x = s.nominal.modes[k].x.col(j);
-      Vector dx(n);
-      for (int i = 0; i < n; ++i) dx(i) = 0.5 * nd(rng);
-      x += dx;
-      // Independent (34) and (33).
-      Vector dz(n + 2);
-      dz << dx, dT;
-      const Vector b = s.pass.Gain(k, j) * dz + s.pass.Feedforward(k, j);
-      const Vector unom = s.nominal.modes[k].u.col(j);
-      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * b, s.problem.bounds.u_min - unom,
-                                   s.problem.bounds.u_max - unom);
-      Vector u(3);
-      ctrl.Step(k, t, x, u);
-      EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
-      for (int i = 0; i < 3; ++i) {
-        active_cases += std::abs(u(i)) >= 1.0 - 1e-12;
+  // Both conventions, and H = L_uu + mu I with the pass's mu.
+  for (const auto equation : {BackwardEquation::kLyapunov, BackwardEquation::kRiccati}) {
+    ControlSetup s(3, 4, 3, 1.0, equation, 0.3);
+    const double alpha = 0.7;
+    Vector dT(2);
+    dT << 0.02, -0.01;
+    OnlineController ctrl;
+    ctrl.Allocate(s.problem, s.nominal.total_samples());
+    ctrl.Load(s.nominal, s.pass, alpha, dT);
+    EXPECT_NEAR(ctrl.PlannedDuration(0), s.nominal.T(0) + 0.02, 1e-12);
+    EXPECT_NEAR(ctrl.PlannedDuration(1), s.nominal.T(1) - s.nominal.T(0) - 0.03, 1e-12);
+    EXPECT_EQ(ctrl.feedback_factor(), equation == BackwardEquation::kLyapunov ? alpha : 1.0);
+    std::mt19937 rng(4);
+    std::normal_distribution<double> nd;
+    int active_cases = 0;
+    for (int k = 0; k < 2; ++k) {
+      const int n = s.sys->state_dim(k);
+      for (int j : {0, 5, 77, s.pass.num_samples(k) - 1}) {
+        const double tau = s.pass.tau(k, j);
+        const double t = (tau - k) * ctrl.PlannedDuration(k);
+        Vector x = s.nominal.modes[k].x.col(j);
+        Vector dx(n);
+        for (int i = 0; i < n; ++i) dx(i) = 0.5 * nd(rng);
+        x += dx;
+        // Independent (34) and (33) with H = D l_uu + mu I.
+        const Vector b = IndependentB(s, k, j, dx, dT, alpha);
+        const double D = k == 0 ? s.nominal.T(0) : s.nominal.T(1) - s.nominal.T(0);
+        const Matrix H = D * s.cost->R_[k] + 0.3 * Matrix::Identity(3, 3);
+        EXPECT_LT((Matrix(s.pass.Hessian(k, j)) - H).cwiseAbs().maxCoeff(), 1e-12);
+        const Vector unom = s.nominal.modes[k].u.col(j);
+        const Vector du = testing::BruteForceBoxQp(H, b, s.problem.bounds.u_min - unom,
+                                                   s.problem.bounds.u_max - unom);
+        Vector u(3);
+        ctrl.Step(k, t, x, u);
+        EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
+        for (int i = 0; i < 3; ++i) {
+          active_cases += std::abs(u(i)) >= 1.0 - 1e-12;
+        }
       }
     }
+    EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
   }
-  EXPECT_GT(active_cases, 0) << "some input bound should be active in this test";
 }
 
 // Steps `ctrl` at random deviations dx from three samples of each mode and compares u with the
 // brute-force box QP (33) for b = expected_b(k, j, dx) (an independent (34)).
-void ExpectStepsMatchQp(const ControlSetup& s, OnlineController& ctrl, double alpha, unsigned seed,
+void ExpectStepsMatchQp(const ControlSetup& s, OnlineController& ctrl, unsigned seed,
                         const std::function<Vector(int, int, const Vector&)>& expected_b) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> nd;
@@ -122,36 +143,13 @@ void ExpectStepsMatchQp(const ControlSetup& s, OnlineController& ctrl, double al
       for (int i = 0; i < n; ++i) dx(i) = 0.3 * nd(rng);
       const Vector x = s.nominal.modes[k].x.col(j) + dx;
       const Vector unom = s.nominal.modes[k].u.col(j);
-      const Vector du = testing::BruteForceBoxQp(s.pass.Luu(k, j), alpha * expected_b(k, j, dx),
+      const Vector du = testing::BruteForceBoxQp(s.pass.Hessian(k, j), expected_b(k, j, dx),
                                                  s.problem.bounds.u_min - unom,
                                                  s.problem.bounds.u_max - unom);
       Vector u(3);
       ctrl.Step(k, t, x, u);
       EXPECT_LT((u - (unom + du)).cwiseAbs().maxCoeff(), 1e-7) << "k " << k << " j " << j;
     }
-  }
-}
-
-TEST(OnlineController, FeedbackScaleMultipliesOnlyTheStateFeedback) {
-  // b = kappa (L_uz + F_u^T P)_x dx + (L_uz + F_u^T P)_T dT + L_u + F_u^T p.
-  ControlSetup s(3);
-  const double alpha = 0.7, kappa = 0.4;
-  Vector dT(2);
-  dT << 0.02, -0.01;
-  OnlineControllerSettings settings;
-  settings.feedback_scale = kappa;
-  OnlineController ctrl;
-  ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
-  ctrl.Load(s.nominal, s.pass, alpha, dT);
-  ExpectStepsMatchQp(s, ctrl, alpha, 5, [&](int k, int j, const Vector& dx) {
-    const Matrix G = s.pass.Gain(k, j);
-    const int n = static_cast<int>(dx.size());
-    return Vector(kappa * G.leftCols(n) * dx + G.rightCols(2) * dT + s.pass.Feedforward(k, j));
-  });
-  for (double bad : {-1.0, std::nan("")}) {
-    settings.feedback_scale = bad;
-    OnlineController c;
-    EXPECT_THROW(c.Allocate(s.problem, 10, settings), InvalidArgument) << bad;
   }
 }
 
@@ -169,13 +167,11 @@ TEST(OnlineController, StateFeedbackScaleMultipliesSingleComponents) {
   OnlineController ctrl;
   ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
   ctrl.Load(s.nominal, s.pass, alpha, dT);
-  ExpectStepsMatchQp(s, ctrl, alpha, 6, [&](int k, int j, const Vector& dx) {
+  ExpectStepsMatchQp(s, ctrl, 6, [&](int k, int j, const Vector& dx) {
     Vector scaled = dx;
     if (k == 0) scaled(1) = 0.0;
     if (k == 1) scaled(2) *= 0.5;
-    const Matrix G = s.pass.Gain(k, j);
-    const int n = static_cast<int>(dx.size());
-    return Vector(G.leftCols(n) * scaled + G.rightCols(2) * dT + s.pass.Feedforward(k, j));
+    return IndependentB(s, k, j, scaled, dT, alpha);
   });
   // Wrong shapes and bad entries are named.
   auto message = [&](const std::vector<Vector>& scale) {
@@ -196,64 +192,13 @@ TEST(OnlineController, StateFeedbackScaleMultipliesSingleComponents) {
   negative(0) = -0.5;
   EXPECT_NE(message({Vector::Ones(4), negative}).find("state_feedback_scale[1](0)"),
             std::string::npos);
-  // Changed after Allocate to a wrong shape: Step throws instead of reading out of range.
-  ctrl.settings().state_feedback_scale = {Vector::Ones(2), Vector::Ones(3)};
-  Vector u(3);
-  EXPECT_THROW(ctrl.Step(0, 0.0, s.nominal.modes[0].x.col(0), u), InvalidArgument);
-}
-
-TEST(OnlineController, PerInputRegularizationSolvesTheRegularizedQp) {
-  // (33) with H = L_uu + diag(mu): kPerInput mu_i = reg (|L_uu,ii| + s_i^-2) with input ranges
-  // s = (2, 10, 1), kScalar mu_i = reg (1 + max|diag L_uu|); each against the brute-force box QP.
-  ControlSetup s(3);
-  s.problem.bounds.u_min = Vector(3);
-  s.problem.bounds.u_max = Vector(3);
-  s.problem.bounds.u_min << -1, -5, -0.5;
-  s.problem.bounds.u_max << 1, 5, 0.5;
-  const Vector inv_s2 = (Vector(3) << 0.25, 0.01, 1.0).finished();
-  const double alpha = 0.7, reg = 0.5;
-  const Vector dT = Vector::Zero(2);
-  for (const auto scaling : {RegularizationScaling::kPerInput, RegularizationScaling::kScalar}) {
-    OnlineControllerSettings settings;
-    settings.regularization = reg;
-    settings.regularization_scaling = scaling;
-    OnlineController ctrl;
-    ctrl.Allocate(s.problem, s.nominal.total_samples(), settings);
-    ctrl.Load(s.nominal, s.pass, alpha, dT);
-    std::mt19937 rng(5);
-    std::normal_distribution<double> nd;
-    double max_diff_other = 0;  // vs the other scaling's solution: must differ
-    for (int k = 0; k < 2; ++k) {
-      const int n = s.sys->state_dim(k);
-      for (int j : {0, 5, 77, s.pass.num_samples(k) - 1}) {
-        const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
-        Vector x = s.nominal.modes[k].x.col(j);
-        for (int i = 0; i < n; ++i) x(i) += 0.5 * nd(rng);
-        Vector dz(n + 2);
-        dz << x - s.nominal.modes[k].x.col(j), dT;
-        const Vector b = s.pass.Gain(k, j) * dz + s.pass.Feedforward(k, j);
-        const Matrix luu = s.pass.Luu(k, j);
-        const double max_diag = luu.diagonal().cwiseAbs().maxCoeff();
-        Vector mu_pi(3), mu_sc = Vector::Constant(3, reg * (1 + max_diag));
-        for (int i = 0; i < 3; ++i) mu_pi(i) = reg * (std::abs(luu(i, i)) + inv_s2(i));
-        const Vector unom = s.nominal.modes[k].u.col(j);
-        const Vector lo = s.problem.bounds.u_min - unom, hi = s.problem.bounds.u_max - unom;
-        const Matrix H_pi = luu + Matrix(mu_pi.asDiagonal());
-        const Matrix H_sc = luu + Matrix(mu_sc.asDiagonal());
-        const Vector du_pi = testing::BruteForceBoxQp(H_pi, alpha * b, lo, hi);
-        const Vector du_sc = testing::BruteForceBoxQp(H_sc, alpha * b, lo, hi);
-        const bool per_input = scaling == RegularizationScaling::kPerInput;
-        Vector u(3);
-        ctrl.Step(k, t, x, u);
-        const Vector& mine = per_input ? du_pi : du_sc;
-        const Vector& other = per_input ? du_sc : du_pi;
-        EXPECT_LT((u - (unom + mine)).cwiseAbs().maxCoeff(), 1e-7)
-            << "per_input " << per_input << " k " << k << " j " << j;
-        max_diff_other = std::max(max_diff_other, (u - (unom + other)).cwiseAbs().maxCoeff());
-      }
-    }
-    EXPECT_GT(max_diff_other, 1e-3) << "the two scalings should give different inputs here";
-  }
+  // Changed after Allocate: the same checks; a cleared scale restores the printed (34).
+  EXPECT_THROW(ctrl.SetStateFeedbackScale({Vector::Ones(2), Vector::Ones(3)}), InvalidArgument);
+  ctrl.SetStateFeedbackScale({});
+  ctrl.Load(s.nominal, s.pass, alpha, dT);
+  ExpectStepsMatchQp(s, ctrl, 7, [&](int k, int j, const Vector& dx) {
+    return IndependentB(s, k, j, dx, dT, alpha);
+  });
 }
 
 TEST(OnlineController, TimeMappingClampsAndInterpolates) {

@@ -24,11 +24,14 @@ std::string ModelPath(const std::string& name) { return std::string(DDOC_MODELS_
 // Owns the robot (mjModel/mjData) and a controller attached through mjcb_control.
 class Rig {
  public:
-  explicit Rig(const std::string& mjcf, ControllerConfig config = {}) {
+  // The robot `mjcf`; the controller's model is the robot's own parameters unless `model` is
+  // given (an inexact model).
+  explicit Rig(const std::string& mjcf, ControllerConfig config = {},
+               const HopperParams* model = nullptr) {
     model_ = LoadMjcf(ModelPath(mjcf));
     data_.reset(mj_makeData(model_.get()));
     config.gait.forward_speed = 0.5;
-    config.model = LoadHopperParamsFromMjcf(ModelPath(mjcf));
+    config.model = model != nullptr ? *model : LoadHopperParamsFromMjcf(ModelPath(mjcf));
     std::string error;
     controller_ = HopperController::Create(model_.get(), config, &error);
     EXPECT_TRUE(controller_) << error;
@@ -289,14 +292,17 @@ TEST(HopperControllerTest, PhaseTimeKeepsInputsInBoundsAndHops) {
 }
 
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
-  // Algorithm 1 with the exact model for a few hops: the learner must accept at least one trial,
-  // and the nominal cost it keeps must drop below the cost of the initial hop (u^0, T^0), i.e.
-  // the last warm-up hop (config.initial_hops) that initializes the learner.
-  Rig rig("hopper.xml");
+  // Algorithm 1 with the paper's inexact model (10 kg, no drag) on the 8 kg robot with drag: the
+  // initial law u^0 from the model hops badly on the robot (the last warm-up hop, which
+  // initializes the learner, costs ~20), and within a few learning hops the nominal the learner
+  // keeps must cost a quarter of that or less. (With the exact model there is nothing to learn:
+  // its hop-to-hop cost varies by ~0.01, more than a few hops of learning can gain.)
+  const HopperParams model = LoadHopperParamsFromMjcf(ModelPath("hopper.xml"));  // 10 kg, no drag
+  Rig rig("hopper_m8.xml", ControllerConfig{}, &model);
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
   double initial = std::numeric_limits<double>::quiet_NaN();
-  while (rig.c().hop() < 8 && rig.d()->time < 8.0) {
+  while (rig.c().hop() < 10 && rig.d()->time < 10.0) {
     rig.Step();
     for (const HopReport& r : rig.c().TakeReports()) {
       if (r.hop + 1 == rig.c().config().initial_hops) initial = rig.c().learner()->nominal_cost();
@@ -304,11 +310,12 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
     }
     ASSERT_FALSE(rig.c().failed()) << rig.c().error();
   }
-  ASSERT_EQ(reports.size(), 8u);
+  ASSERT_EQ(reports.size(), 10u);
+  ASSERT_GT(initial, 5.0) << "the model's law should hop badly on the lighter robot";
   int accepted = 0;
-  for (size_t i = 1; i < reports.size(); ++i) accepted += reports[i].accepted ? 1 : 0;
-  EXPECT_GE(accepted, 1);
-  EXPECT_LT(rig.c().learner()->nominal_cost(), initial);
+  for (const HopReport& r : reports) accepted += r.hop >= rig.c().config().initial_hops && r.accepted;
+  EXPECT_GE(accepted, 2);
+  EXPECT_LT(rig.c().learner()->nominal_cost(), 0.25 * initial);
 }
 
 TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {

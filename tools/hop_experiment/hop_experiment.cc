@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <memory>
 #include <string>
 
 #include <Eigen/Eigenvalues>
@@ -51,21 +52,17 @@ const char* kUsage =
     "  --method ocfb|alg1   (ocfb)\n"
     "  --hops 100           closed-loop hops\n"
     "  --solve-trials 50    OC-FB model solve trials (0: the constant-input gait is the nominal)\n"
-    "  --reg 0.1            OnlineControllerSettings::regularization (model solve and robot)\n"
-    "  --riccati 0|1|2      BackwardPassSettings::equation: 0 kLyapunov (paper), 1 kRiccatiFeedback,\n"
-    "                       2 kRiccati (mu = --reg)\n"
+    "  --reg 0.1            LearnerSettings::regularization_min (model solve and robot)\n"
+    "  --riccati 0|2        BackwardPassSettings::equation: 0 kLyapunov (paper), 2 kRiccati\n"
             "  --stance-open-loop 0|1  experiment: nominal inputs in stance, feedback in flight only\n"
     "  --stance-phase 0|1   experiment: stance tau from the leg spring phase, not the clock\n"
     "  --flight-phase 0|1   experiment: flight tau = t / (t + ballistic time to the nominal TD height)\n"
-    "  --alpha-ff 0|1       alpha on the feed-forward only (1) or on all of b (0, the paper)\n"
     "  --ocfb-alpha 0       alpha of ConvergedPolicy\n"
     "  --c 1e-7 --gamma 0.5 --grow 0|1 --alpha0 1   Algorithm 1 line search\n"
     "  --reference own|nominal  x_ref of I1 for the learner on the plant\n"
     "  --q-y 0 --q-yd 10    I1 weights of y and yd (experiment; Fig. 2: 0, 10)\n"
     "  --cyclic 0           BackwardPassSettings::cyclic_value (periodic Riccati value)\n"
     "  --event 0|1          BackwardPassSettings::terminal_event (projected terminal cost)\n"
-    "  --rebaseline 0 --isc 0   LearnerSettings::rebaseline_after, initial_state_correction\n"
-    "  --kfb 1              OnlineControllerSettings::feedback_scale\n"
     "  --own-start 0|1      re-run (30) with I1's x(0) = the next hop's measured takeoff state\n"
     "  --model-M 10 --model-cd 0 --plant-M 10 --plant-cd 0\n"
     "  --pert 0.05          initial perturbation: xd += p, phi += p/5, phid += p\n"
@@ -226,23 +223,21 @@ int main(int argc, char** argv) {
       [&](int k, const ConstVectorRef& x, const ConstVectorRef& u) { return truth.Guard(k, x, u); });
 
   LearnerSettings ls;
+  ls.acceptance = Acceptance::kSufficientDecrease;
+  ls.interpolate_backtracking = false;
+  ls.step_convergence = true;
   ls.c = a.Get("c", 1e-7);
   ls.gamma = a.Get("gamma", 0.5);
   ls.alpha_initial = a.Get("alpha0", 1.0);
   ls.alpha_min = std::min(1e-6, 0.5 * ls.alpha_initial);
   ls.reset_alpha_on_accept = a.Get("grow", 1) == 0;
-  ls.controller.alpha_scales_feedback = a.Get("alpha-ff", 1) == 0;
-  ls.controller.regularization = a.Get("reg", 0.1);
-  ls.controller.feedback_scale = a.Get("kfb", 1.0);
+  ls.regularization_min = a.Get("reg", 0.1);
   ls.backward.cyclic_value = a.Get("cyclic", 0.0);
   ls.backward.terminal_event = a.Get("event", 0) != 0;
-  ls.rebaseline_after = static_cast<int>(a.Get("rebaseline", 0));
-  ls.initial_state_correction = a.Get("isc", 0) != 0;
   const int riccati = static_cast<int>(a.Get("riccati", 0));
-  if (riccati == 1) ls.backward.equation = BackwardEquation::kRiccatiFeedback;
-  if (riccati == 2) ls.backward.equation = BackwardEquation::kRiccati;
+  ls.backward.equation = riccati == 2 ? BackwardEquation::kRiccati : BackwardEquation::kLyapunov;
+  ls.backward.integrator = BackwardIntegrator::kRk4;
   ls.backward.psd_switching_hessians = a.Get("psd", 1) != 0;
-  ls.backward.riccati_regularization = ls.controller.regularization;
   ls.max_trials = std::max(1, static_cast<int>(a.Get("solve-trials", 50)));
   const bool solve = a.Get("solve-trials", 50) > 0;
 
