@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
 
 namespace ddoc {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Offsets within rounding of zero (a nominal duration on its bound) become exactly zero, so the
 // QP sees the variable on its bound.
@@ -33,8 +36,9 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
   x->setZero(K);
   BoxQPStatus status = qp.Solve(H, g, lo, hi, *x);
   const double sum0 = x->sum();
-  const double scale = 1.0 + lo.cwiseAbs().cwiseMin(hi.cwiseAbs()).sum() + x->cwiseAbs().sum();
-  const double tol = 1e-13 * scale;
+  // Tolerance relative to the finite quantities (bounds may be infinite).
+  const double tol = 1e-13 * (1.0 + x->cwiseAbs().sum() + std::abs(sum_lo == -kInf ? 0.0 : sum_lo) +
+                              std::abs(sum_hi == kInf ? 0.0 : sum_hi));
   if (sum0 >= sum_lo - tol && sum0 <= sum_hi + tol) return status;
   // The sum constraint is active at s: 1^T x(nu) is non-increasing in the multiplier nu of
   // min 1/2 x^T H x + (g + nu 1)^T x over the box, so bisect for 1^T x(nu) = s.

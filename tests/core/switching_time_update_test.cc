@@ -144,6 +144,15 @@ struct TwoModes {
   }
 };
 
+TEST(DurationQp, UnboundedVariablesWithAFixedSum) {
+  // min 1/2 |x|^2 + g^T x with 1^T x = 0 and no box: x = -(g - mean(g)).
+  const Vector g = (Vector(3) << 3.0, 1.0, 2.0).finished();
+  const Vector lo = Vector::Constant(3, -kInf), hi = Vector::Constant(3, kInf);
+  Vector x;
+  SolveDurationQp(Matrix::Identity(3, 3), g, lo, hi, 0.0, 0.0, &x);
+  EXPECT_LT((x - (Vector(3) << -1.0, 1.0, 0.0).finished()).norm(), 1e-12);
+}
+
 TEST(SwitchingTimeUpdate, FixedFinalTimeMovesOnlyTheSwitch) {
   TwoModes t;
   t.problem.bounds.FixFinalTime(1.2);
