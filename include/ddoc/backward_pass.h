@@ -70,6 +70,10 @@ struct BackwardPassSettings {
   /// through the event, Pi = I - f gamma_x^T / (gamma_x^T f):
   /// P_xx(K) = Pi^T Phi_xx Pi, p_x(K) = Pi^T Phi_x - l gamma_x / (gamma_x^T f).
   bool terminal_event = false;
+  /// Keep P at every sample for P(k, j) (diagnostics, tests); default false: only at the first
+  /// and last sample of each mode (what the jumps, (31) and the cyclic value need), which saves
+  /// writing (n+K)^2 doubles per sample.
+  bool keep_P_trajectory = false;
 };
 
 /// Why a Run did not produce usable results.
@@ -146,7 +150,8 @@ class BackwardPass {
   int augmented_dim(int k) const { return dims_[k] + K_; }
 
   double tau(int k, int j) const { return tau_(index(k, j)); }
-  /// P and p at sample (k, j).
+  /// P and p at sample (k, j). P only at the first and last sample of a mode unless
+  /// keep_P_trajectory (InvalidArgument otherwise).
   Eigen::Map<const Matrix> P(int k, int j) const;
   Eigen::Map<const Vector> p(int k, int j) const;
   /// L_uz + F_u^T P, m x (n_k+K): the state/time feedback part of b in (34).
@@ -242,10 +247,12 @@ class BackwardPass {
   Vector w_;                // nz_max: P(:, 0:n) f
   Matrix M_;                // nz_max x m: P F_u + L_zu
   Matrix W_;                // nz_max x m: M Hinv
+  Matrix Mt_;               // m x nz_max: M^T
   Vector hx_curv_, hu_curv_;  // n, m: f_x^T p_x, f_u^T p_x
   Vector gu_, k_, tmpm_;    // m
   Vector bdu_;              // n_max: F_u du_prev
-  Matrix tmp_;              // nz_max x nz_max
+  Matrix tmp_;              // nz_max x nz_max (the Riccati term M_F H_FF^-1 M_F^T of a stage)
+  bool riccati_term_ = false;  // tmp_ holds the Riccati term of the last Derivative
   Eigen::LLT<Matrix> llt_;  // m x m
   Matrix hff_;              // m x m
   std::vector<int> free_;   // m

@@ -1,12 +1,11 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/backward_pass.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
-
-#include <Eigen/Eigenvalues>
 
 #include "small_product.h"
 
@@ -14,7 +13,7 @@ namespace ddoc {
 
 void BackwardPass::Interval::Allocate(int n, int m) {
   f.setZero(n);
-  fx.setZero(n, n);
+  fx.setZero(n, n + 1);
   fu.setZero(n, m);
   lx.setZero(n);
   lu.setZero(m);
@@ -39,8 +38,9 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
                           std::to_string(settings.cyclic_value) + ", expected in [0, 1]");
   }
   if (settings.cyclic_max_sweeps < 1 || !(settings.cyclic_tolerance > 0)) {
-    throw InvalidArgument("BackwardPassSettings: cyclic_max_sweeps must be >= 1 and "
-                          "cyclic_tolerance > 0");
+    throw InvalidArgument(
+        "BackwardPassSettings: cyclic_max_sweeps must be >= 1 and "
+        "cyclic_tolerance > 0");
   }
   problem_ = &problem;
   settings_ = settings;
@@ -91,6 +91,7 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   w_.setZero(nz_max_);
   M_.setZero(nz_max_, m_);
   W_.setZero(nz_max_, m_);
+  Mt_.setZero(m_, nz_max_);
   hx_curv_.setZero(n_max_);
   hu_curv_.setZero(m_);
   gu_.setZero(m_);
@@ -113,6 +114,11 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
 }
 
 Eigen::Map<const Matrix> BackwardPass::P(int k, int j) const {
+  if (!settings_.keep_P_trajectory && j != 0 && j != counts_[k] - 1) {
+    throw InvalidArgument("BackwardPass::P(" + std::to_string(k) + ", " + std::to_string(j) +
+                          "): only the first and last sample of a mode are kept (set "
+                          "BackwardPassSettings::keep_P_trajectory)");
+  }
   const int nz = augmented_dim(k);
   return Eigen::Map<const Matrix>(P_store_.col(index(k, j)).data(), nz, nz);
 }
@@ -139,6 +145,49 @@ Eigen::Map<const Vector> BackwardPass::p2_initial() const {
 }
 Matrix BackwardPass::P22_initial() const { return P(0, 0).bottomRightCorner(K_, K_); }
 
+namespace {
+
+// y = A^T x for column-major A (one contiguous dot product per column of A).
+template <class MatA, class VecX, class VecY>
+inline void TransposeTimes(const MatA& A, const VecX& x, VecY&& y) {
+  for (Eigen::Index i = 0; i < A.cols(); ++i) y(i) = A.col(i).dot(x);
+}
+
+// With the half Y of dP = Y + Y^T (nz x nz) and the symmetric Q = q_scale * L (n x n, the
+// unscaled l_xx) added to the top-left block: kStage Ps = P + a dP, kStep P += a dP, kStore
+// out = dP. Each pair (r, c), (c, r) gets the same value, so P stays exactly symmetric.
+enum class SymKind { kStage, kStep, kStore };
+// R (nz x nz, symmetric; may be null) is subtracted once: the Riccati term M_F H_FF^-1 M_F^T.
+template <SymKind kKind>
+void Symmetrize(int nz, int n, const double* Y, int ldy, const double* L, int ldl, double q_scale,
+                const double* R, int ldr, double* P, int ldp, double* out, int ldo, double a) {
+  for (int c = 0; c < nz; ++c) {
+    const double* yc = Y + static_cast<ptrdiff_t>(c) * ldy;
+    const double* lc = L + static_cast<ptrdiff_t>(c) * ldl;
+    const double* rcol = R != nullptr ? R + static_cast<ptrdiff_t>(c) * ldr : nullptr;
+    for (int r = 0; r <= c; ++r) {
+      double d = yc[r] + Y[static_cast<ptrdiff_t>(r) * ldy + c];
+      if (c < n) d += q_scale * lc[r];
+      if (rcol != nullptr) d -= rcol[r];
+      const ptrdiff_t rc = static_cast<ptrdiff_t>(c) * ldp + r;
+      const ptrdiff_t cr = static_cast<ptrdiff_t>(r) * ldp + c;
+      if (kKind == SymKind::kStage) {
+        out[static_cast<ptrdiff_t>(c) * ldo + r] = P[rc] + a * d;
+        out[static_cast<ptrdiff_t>(r) * ldo + c] = P[cr] + a * d;
+      } else if (kKind == SymKind::kStep) {
+        const double v = P[rc] + a * d;
+        P[rc] = v;
+        P[cr] = v;
+      } else {
+        out[static_cast<ptrdiff_t>(c) * ldo + r] = d;
+        out[static_cast<ptrdiff_t>(r) * ldo + c] = d;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev) {
   // Interval j of mode k: u_j held on [t_j, t_{j+1}], coefficients at the midpoint state.
   const SwitchedSystem& sys = *problem_->system;
@@ -157,12 +206,12 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   sys.FlowDerivatives(k, xm, u, fx, fu);
   fx *= D;
   fu *= D;
+  c_.fx.col(n).head(n) = f;  // [D f_x, f]: one product gives P(:, 0:n) D f_x and P(:, 0:n) f
   c_.l = cost.Running(k, xm, u);
   auto lx = c_.lx.head(n);
   auto lxx = c_.lxx.topLeftCorner(n, n);
   auto lux = c_.lux.leftCols(n);
-  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);
-  lxx *= D;
+  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);  // lxx: D is applied in Symmetrize
   lux *= D;
   c_.H *= D;
   if (m_ > 0) luu_scale_ = std::max(luu_scale_, c_.H.diagonal().cwiseAbs().maxCoeff());
@@ -185,9 +234,14 @@ bool BackwardPass::FreeSet(int n, const ConstMatrixRef& /*P*/, const ConstVector
   if (m == 0) return true;
   gu_.noalias() = c_.D * c_.lu;
   gu_.noalias() += c_.fu.topRows(n).transpose() * p.head(n);
+  if (settings_.equation != BackwardEquation::kRiccati) {
+    // kLyapunov needs no H^{-1}; H must still be positive definite for (33).
+    llt_.compute(c_.H);
+    return llt_.info() == Eigen::Success;
+  }
   int nf = 0;
   c_.kc.setZero();
-  if (box_ && settings_.box_aware && settings_.equation == BackwardEquation::kRiccati) {
+  if (box_ && settings_.box_aware) {
     if (qp_.Solve(c_.H, gu_, c_.lo, c_.hi, k_) == BoxQPStatus::kNotPositiveDefinite) return false;
     for (int i = 0; i < m; ++i) {
       if (k_(i) <= c_.lo(i) || k_(i) >= c_.hi(i)) {
@@ -225,55 +279,56 @@ bool BackwardPass::FreeSet(int n, const ConstMatrixRef& /*P*/, const ConstVector
 }
 
 void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
-                              const ConstVectorRef& lam, MatrixRef dP, VectorRef dp,
-                              VectorRef dlam, bool store_mid, int s) {
+                              const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
+                              bool store_mid, int s) {
   const int K = K_;
   const int nz = n + K;
   const int m = m_;
   const bool riccati = settings_.equation == BackwardEquation::kRiccati;
   const double D = c_.D;
+  riccati_term_ = false;
   const auto f = c_.f.head(n);
   const auto fx = c_.fx.topLeftCorner(n, n);  // D f_x
   const auto fu = c_.fu.topRows(n);           // D f_u
   const auto px = p.head(n);
-  // Z = P(:, 0:n) (D f_x), w = P(:, 0:n) f: P F_z = [Z, w c^T].
-  internal::SmallProduct(nz, n, n, P.data(), static_cast<int>(P.outerStride()), fx.data(),
-                         static_cast<int>(c_.fx.outerStride()), Z_.data(),
-                         static_cast<int>(Z_.outerStride()));
-  auto Z = Z_.topLeftCorner(nz, n);
-  auto w = w_.head(nz);
-  w.noalias() = P.leftCols(n) * f;
-  // Time curvature: p_x^T d^2 F / (dT_k dx) = p_x^T f_x, p_x^T d^2 F / (dT_k du) = p_x^T f_u.
+  const int ldP = static_cast<int>(P.outerStride());
+  const int ldd = static_cast<int>(dP.outerStride());
+  // dP is returned as its "half" Y with dP = Y + Y^T + D l_xx - M_F H_FF^{-1} M_F^T
+  // (Symmetrize forms the sum fused with the stage update; the last term is left in tmp_).
+  // P F_z = [P(:, 0:n) D f_x, w c^T] with w = P(:, 0:n) f: the product goes straight into the
+  // left columns of Y, w into column n+k (and -w into n+k-1).
+  internal::SmallProduct(nz, n + 1, n, P.data(), ldP, c_.fx.data(),
+                         static_cast<int>(c_.fx.outerStride()), dP.data(), ldd);
+  // Column n now holds w; move it to column n + k, -w to n + k - 1, zeros elsewhere.
+  if (k > 0) {
+    auto w = w_.head(nz);
+    w = dP.col(n);
+    dP.rightCols(K).setZero();
+    dP.col(n + k) = w;
+    dP.col(n + k - 1) = -w;
+  } else {
+    dP.rightCols(K - 1).setZero();
+  }
+  // + (l_x + time curvature p_x^T f_x) c^T in the (x, T) column(s) (the symmetric sum adds
+  // its transpose; D l_xx is added there too).
   auto hx = hx_curv_.head(n);
   if (settings_.time_curvature) {
-    hx.noalias() = fx.transpose() * px;
-    hx /= D;
-    hu_curv_.noalias() = fu.transpose() * px;
-    hu_curv_ /= D;
+    TransposeTimes(fx, px, hx);
+    hx *= 1.0 / D;
+    TransposeTimes(fu, px, hu_curv_);
+    hu_curv_ *= 1.0 / D;
   } else {
     hx.setZero();
     hu_curv_.setZero();
   }
-  // dP = P F_z + F_z^T P + L_zz.
-  auto PA = tmp_.topLeftCorner(nz, nz);
-  PA.leftCols(n) = Z;
-  PA.rightCols(K).setZero();
-  PA.col(n + k) = w;
-  if (k > 0) PA.col(n + k - 1) = -w;
-  dP = PA + PA.transpose();
-  dP.topLeftCorner(n, n) += c_.lxx.topLeftCorner(n, n);
   {
     auto v = bdu_.head(n);  // scratch: l_x + p_x^T f_x
     v = c_.lx.head(n) + hx;
     dP.col(n + k).head(n) += v;
-    dP.row(n + k).head(n) += v.transpose();
-    if (k > 0) {
-      dP.col(n + k - 1).head(n) -= v;
-      dP.row(n + k - 1).head(n) -= v.transpose();
-    }
+    if (k > 0) dP.col(n + k - 1).head(n) -= v;
   }
   // dp = F_z^T p + L_z: x part D f_x^T p_x + D l_x, T part c (f^T p_x + l).
-  dp.head(n).noalias() = fx.transpose() * px;
+  TransposeTimes(fx, px, dp.head(n));
   dp.head(n) += D * c_.lx.head(n);
   dp.tail(K).setZero();
   {
@@ -284,24 +339,31 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
   // M = P F_u + L_zu (nz x m): needed by kRiccati, by use_previous_du and for the gain output.
   const bool need_M = riccati || store_mid || (settings_.use_previous_du && du_prev_ != nullptr);
   auto M = M_.topRows(nz);
+  const int ldM = static_cast<int>(M_.outerStride());
   if (need_M && m > 0) {
-    M.noalias() = P.leftCols(n) * fu;
+    internal::SmallProduct(nz, m, n, P.data(), ldP, fu.data(),
+                           static_cast<int>(c_.fu.outerStride()), M_.data(), ldM);
     M.topRows(n) += c_.lux.leftCols(n).transpose();
     hu_curv_ += c_.lu;  // l_u + p_x^T f_u: the row of L_uz + curvature for T_k
     M.row(n + k) += hu_curv_.transpose();
     if (k > 0) M.row(n + k - 1) -= hu_curv_.transpose();
   }
-  gu_.noalias() = D * c_.lu;
-  if (m > 0) gu_.noalias() += fu.transpose() * px;
+  if (m > 0) TransposeTimes(fu, px, gu_);
+  gu_ += D * c_.lu;
   if (riccati && m > 0) {
-    // k = kc - Hinv (g_u + H kc), dP -= M Hinv M^T, dp += M k.
+    // k = kc - Hinv (g_u + H kc), dP -= (M Hinv) M^T, dp += M k.
     tmpm_ = gu_;
     tmpm_.noalias() += c_.H * c_.kc;
     k_ = c_.kc;
     k_.noalias() -= c_.Hinv * tmpm_;
-    auto W = W_.topRows(nz);
-    W.noalias() = M * c_.Hinv;
-    dP.noalias() -= W * M.transpose();
+    const int ldW = static_cast<int>(W_.outerStride());
+    internal::SmallProduct(nz, m, m, M_.data(), ldM, c_.Hinv.data(),
+                           static_cast<int>(c_.Hinv.outerStride()), W_.data(), ldW);
+    auto Mt = Mt_.leftCols(nz);  // m x nz
+    Mt = M.transpose();
+    const int ldt = static_cast<int>(tmp_.outerStride());
+    internal::SmallProduct(nz, nz, m, W_.data(), ldW, Mt.data(), m, tmp_.data(), ldt);
+    riccati_term_ = true;  // Symmetrize subtracts tmp_
     dp.noalias() += M * k_;
   } else if (settings_.use_previous_du && du_prev_ != nullptr && m > 0) {
     dp.noalias() += M * du_prev_->col(du_index_);
@@ -310,7 +372,7 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
   const bool separate_lambda = riccati || settings_.use_previous_du;
   if (separate_lambda) {
     const auto lx = lam.head(n);
-    dlam.head(n).noalias() = fx.transpose() * lx;
+    TransposeTimes(fx, lx, dlam.head(n));
     dlam.head(n) += D * c_.lx.head(n);
     dlam.tail(K).setZero();
     const double lt = f.dot(lx) + c_.l;
@@ -322,8 +384,8 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     if (m > 0) gain = M.transpose();
     ff_store_.col(s) = gu_;
     auto grad = grad_store_.col(s);
-    grad = D * c_.lu;
-    if (m > 0) grad.noalias() += fu.transpose() * (separate_lambda ? lam.head(n) : px);
+    if (m > 0) TransposeTimes(fu, separate_lambda ? lam.head(n) : px, grad);
+    grad += D * c_.lu;
     if (riccati) {
       step_store_.col(s) = k_;
     } else {
@@ -336,8 +398,9 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
 void BackwardPass::StoreState(int k, int j) {
   const int nz = dims_[k] + K_;
   const int s = index(k, j);
-  Eigen::Map<Matrix>(P_store_.col(s).data(), nz, nz) = P_.topLeftCorner(nz, nz);
   p_store_.col(s).head(nz) = p_.head(nz);
+  if (!settings_.keep_P_trajectory && j != 0 && j != counts_[k] - 1) return;
+  Eigen::Map<Matrix>(P_store_.col(s).data(), nz, nz) = P_.topLeftCorner(nz, nz);
 }
 
 void BackwardPass::CopyOutputs(int from, int to) {
@@ -477,8 +540,21 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       auto l1 = dlam_[1].head(nz);
       const bool separate_lambda = riccati || settings_.use_previous_du;
       // Stage 1 at the right end, stage 2 at the midpoint (its outputs are the interval's).
+      const int ld = nz_max_;
+      const double* lxx = c_.lxx.data();
+      const int ldl = static_cast<int>(c_.lxx.outerStride());
+      const int ldr = static_cast<int>(tmp_.outerStride());
+      auto R = [&]() -> const double* { return riccati_term_ ? tmp_.data() : nullptr; };
+      const double D = c_.D;
       Derivative(k, n, P, p, lam, d0, e0, l0, false, s);
-      Ps = P + (0.5 * h) * d0;
+      if (!rk4) {
+        Symmetrize<SymKind::kStage>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
+                                    Ps.data(), ld, 0.5 * h);
+      } else {
+        Symmetrize<SymKind::kStore>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
+                                    d0.data(), ld, 0.0);
+        Ps = P + (0.5 * h) * d0;
+      }
       ps = p + (0.5 * h) * e0;
       if (separate_lambda) lams = lam + (0.5 * h) * l0;
       Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d1, e1, l1, true, s);
@@ -488,7 +564,8 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
         predicted_quadratic_ += h * k_.dot(tmpm_);
       }
       if (!rk4) {
-        P += h * d1;
+        Symmetrize<SymKind::kStep>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
+                                   nullptr, ld, h);
         p += h * e1;
         if (separate_lambda) lam += h * l1;
       } else {
@@ -498,23 +575,25 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
         auto e3 = dp_[3].head(nz);
         auto l2 = dlam_[2].head(nz);
         auto l3 = dlam_[3].head(nz);
+        Symmetrize<SymKind::kStore>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
+                                    d1.data(), ld, 0.0);
         Ps = P + (0.5 * h) * d1;
         ps = p + (0.5 * h) * e1;
         if (separate_lambda) lams = lam + (0.5 * h) * l1;
         Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d2, e2, l2, false, s);
+        Symmetrize<SymKind::kStore>(nz, n, d2.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
+                                    d2.data(), ld, 0.0);
         Ps = P + h * d2;
         ps = p + h * e2;
         if (separate_lambda) lams = lam + h * l2;
         Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d3, e3, l3, false, s);
+        Symmetrize<SymKind::kStore>(nz, n, d3.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
+                                    d3.data(), ld, 0.0);
         P += (h / 6.0) * (d0 + 2.0 * d1 + 2.0 * d2 + d3);
         p += (h / 6.0) * (e0 + 2.0 * e1 + 2.0 * e2 + e3);
         if (separate_lambda) lam += (h / 6.0) * (l0 + 2.0 * l1 + 2.0 * l2 + l3);
       }
       if (!separate_lambda) lam = p;
-      // Keep P symmetric against rounding drift.
-      for (int c = 0; c < nz; ++c) {
-        for (int r = 0; r < c; ++r) P(r, c) = P(c, r) = 0.5 * (P(r, c) + P(c, r));
-      }
       StoreState(k, j);
     }
     CopyOutputs(index(k, N - 2), index(k, N - 1));
@@ -541,8 +620,8 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
   if (nominal.num_modes() != K_ || nominal.T.size() != K_) {
     throw InvalidArgument("BackwardPass::Run: trajectory has " +
                           std::to_string(nominal.num_modes()) + " modes and T of size " +
-                          std::to_string(nominal.T.size()) + ", expected K = " +
-                          std::to_string(K_));
+                          std::to_string(nominal.T.size()) +
+                          ", expected K = " + std::to_string(K_));
   }
   int total = 0;
   for (int k = 0; k < K_; ++k) {
@@ -566,8 +645,8 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
   }
   if (settings_.use_previous_du && du_prev != nullptr &&
       (du_prev->rows() != m_ || du_prev->cols() != total)) {
-    throw InvalidArgument("BackwardPass::Run: du_prev is " + std::to_string(du_prev->rows()) +
-                          "x" + std::to_string(du_prev->cols()) + ", expected m x samples = " +
+    throw InvalidArgument("BackwardPass::Run: du_prev is " + std::to_string(du_prev->rows()) + "x" +
+                          std::to_string(du_prev->cols()) + ", expected m x samples = " +
                           std::to_string(m_) + "x" + std::to_string(total));
   }
   const Matrix* du = settings_.use_previous_du ? du_prev : nullptr;

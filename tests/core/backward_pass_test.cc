@@ -84,6 +84,7 @@ void LqErrors(const ScalarLqSetup& setup, const Trajectory& traj, BackwardIntegr
               double* eP, double* ep) {
   BackwardPass pass;
   BackwardPassSettings settings;
+  settings.keep_P_trajectory = true;
   settings.equation = BackwardEquation::kLyapunov;
   settings.integrator = integrator;
   pass.Allocate(setup.problem, traj.total_samples(), settings);
@@ -119,6 +120,7 @@ TEST(BackwardPass, ScalarLqTimeGradientIsP2) {
   const ScalarLqSetup setup{ScalarLq{}};
   const Trajectory traj = setup.Exact(481);
   BackwardPassSettings settings;
+  settings.keep_P_trajectory = true;
   settings.equation = BackwardEquation::kLyapunov;
   BackwardPass pass;
   pass.Allocate(setup.problem, 481, settings);
@@ -402,6 +404,7 @@ TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
   const UnboundedScalarLq setup;
   const Trajectory traj = setup.Exact(481);
   BackwardPassSettings settings;
+  settings.keep_P_trajectory = true;
   settings.equation = BackwardEquation::kRiccati;
   settings.integrator = BackwardIntegrator::kRk4;
   BackwardPass pass;
@@ -410,11 +413,14 @@ TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
   ExpectScalarRiccati(setup.lq, setup.lq.r, pass);
   // The midpoint integrator (the default) agrees to second order.
   BackwardPass mid;
-  mid.Allocate(setup.problem, 481);
+  BackwardPassSettings mid_settings;
+  mid_settings.keep_P_trajectory = true;
+  mid.Allocate(setup.problem, 481, mid_settings);
   mid.Run(traj);
   EXPECT_NEAR(mid.P(0, 0)(0, 0), pass.P(0, 0)(0, 0), 1e-4 * pass.P(0, 0)(0, 0));
   // kRiccati changes p, not the gradient adjoint of the Lyapunov form.
   BackwardPassSettings lyap_settings;
+  lyap_settings.keep_P_trajectory = true;
   lyap_settings.equation = BackwardEquation::kLyapunov;
   BackwardPass lyapunov;
   lyapunov.Allocate(setup.problem, 481, lyap_settings);
@@ -436,9 +442,12 @@ TEST(BackwardPass, RiccatiIsBoxAware) {
   clamped.problem.bounds.u_max(0) = lq.u0;
   const Trajectory traj = clamped.Exact(241);
   BackwardPassSettings lyap_settings;
+  lyap_settings.keep_P_trajectory = true;
   lyap_settings.equation = BackwardEquation::kLyapunov;
+  BackwardPassSettings box_settings;
+  box_settings.keep_P_trajectory = true;
   BackwardPass box, lyapunov;
-  box.Allocate(clamped.problem, 241);
+  box.Allocate(clamped.problem, 241, box_settings);
   lyapunov.Allocate(clamped.problem, 241, lyap_settings);
   box.Run(traj);
   lyapunov.Run(traj);
@@ -453,7 +462,7 @@ TEST(BackwardPass, RiccatiIsBoxAware) {
   EXPECT_EQ(box.predicted_linear(), 0.0);  // nothing to gain inside the box
   ScalarLqSetup free{lq};
   BackwardPass riccati;
-  riccati.Allocate(free.problem, 241);
+  riccati.Allocate(free.problem, 241, box_settings);
   riccati.Run(traj);
   EXPECT_GT(lyapunov.P(0, 0)(0, 0) - riccati.P(0, 0)(0, 0), 0.5 * riccati.P(0, 0)(0, 0));
   EXPECT_LT(riccati.predicted_linear(), 0.0);
@@ -466,6 +475,7 @@ TEST(BackwardPass, RegularizationEntersAsMu) {
   const Trajectory traj = setup.Exact(481);
   const double mu = 0.4;
   BackwardPassSettings settings;
+  settings.keep_P_trajectory = true;
   settings.integrator = BackwardIntegrator::kRk4;
   BackwardPass pass;
   pass.Allocate(setup.problem, 481, settings);
@@ -486,6 +496,7 @@ TEST(BackwardPass, PsdSwitchingHessiansProjectsAnIndefiniteTerminalHessian) {
   const ScalarLqSetup setup{negative};
   const Trajectory traj = setup.Exact(241);
   BackwardPassSettings plain;
+  plain.keep_P_trajectory = true;
   plain.equation = BackwardEquation::kLyapunov;
   plain.integrator = BackwardIntegrator::kRk4;  // P has constant coefficients: RK4 is exact
   BackwardPassSettings psd = plain;
@@ -656,6 +667,18 @@ TEST(BackwardPass, CyclicValueRunDoesNotAllocateAndRejectsBadWeights) {
     BackwardPass b;
     EXPECT_THROW(b.Allocate(lq.problem, 100, settings), InvalidArgument) << bad;
   }
+}
+
+TEST(BackwardPass, KeepsPOnlyAtModeEndsUnlessAsked) {
+  const ScalarLqSetup setup{ScalarLq{}};
+  const Trajectory traj = setup.Exact(100);
+  BackwardPass pass;
+  pass.Allocate(setup.problem, 100);
+  pass.Run(traj);
+  EXPECT_NO_THROW(pass.P(0, 0));
+  EXPECT_NO_THROW(pass.P(0, 99));
+  EXPECT_THROW(pass.P(0, 50), InvalidArgument);
+  EXPECT_NO_THROW(pass.p(0, 50));
 }
 
 TEST(BackwardPass, RejectsMismatchedTrajectories) {

@@ -7,6 +7,7 @@
 #include <benchmark/benchmark.h>
 
 #include "ddoc/backward_pass.h"
+#include "ddoc/learner.h"
 #include "ddoc/online_controller.h"
 #include "ddoc/plant.h"
 
@@ -136,15 +137,18 @@ BENCHMARK(BM_OnlineStep)
     ->ArgsProduct({{4, 8, 20}, {16, 32}})
     ->Unit(benchmark::kMicrosecond);
 
-// Args: n + K, samples, integrator (0 RK4, 1 midpoint), equation (0 Lyapunov, 2 Riccati).
+// Args: n + K, samples, integrator (0 RK4, 1 midpoint), preset (0 the paper's backward pass:
+// kLyapunov with the previous-du term off, no time curvature; 1 the default: box-aware kRiccati
+// with time curvature).
 void BM_BackwardPass(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0)) - kModes;
   const int samples = static_cast<int>(state.range(1));
   Setup s(n, 4, samples);
-  BackwardPassSettings settings;
+  BackwardPassSettings settings =
+      state.range(3) == 0 ? LearnerSettings::Paper().backward : LearnerSettings{}.backward;
+  settings.use_previous_du = false;
   settings.integrator =
       state.range(2) == 0 ? BackwardIntegrator::kRk4 : BackwardIntegrator::kMidpoint;
-  settings.equation = static_cast<BackwardEquation>(state.range(3));
   BackwardPass pass;
   pass.Allocate(s.problem, samples, settings);
   for (auto _ : state) {
@@ -156,7 +160,7 @@ void BM_BackwardPass(benchmark::State& state) {
                                       benchmark::Counter::kInvert);
 }
 BENCHMARK(BM_BackwardPass)
-    ->ArgNames({"nK", "samples", "midpoint", "eq"})
+    ->ArgNames({"nK", "samples", "midpoint", "preset"})
     ->ArgsProduct({{16, 32, 64}, {500, 1000, 2000}, {0}, {0}})
     ->Args({16, 1000, 1, 0})
     ->Args({16, 1000, 0, 1})->Args({16, 1000, 1, 1})
