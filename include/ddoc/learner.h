@@ -58,8 +58,10 @@ struct LearnerSettings {
   double epsilon = 1e-8;        ///< threshold of the step test
   int delta_i = 2;              ///< Delta i of the step test
   /// First-order optimality (ComputeOptimality: the projected gradient w.r.t. u(.) and T) at
-  /// which the learner has converged, relative to its value at the initial nominal; no test
-  /// reports convergence above it. Default 1e-6.
+  /// which the learner has converged, relative to its value at the initial nominal. Default
+  /// 1e-6. With kPredictedDecrease it has also converged when the full step's predicted gain is
+  /// at the rounding level of the cost (1e-12 (1 + |I|)) and the optimality is below 1e-3 of
+  /// its initial value; no test reports convergence above that.
   double optimality_tolerance = 1e-6;
   /// Floor of the Levenberg-Marquardt regularization mu of H = L_uu + mu I (units of
   /// L_uu = D l_uu): mu starts here, grows 10x when the backward pass fails (not positive

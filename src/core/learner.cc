@@ -184,6 +184,16 @@ void Learner::RecomputeDirection() {
 void Learner::UpdateConvergence() {
   const double limit = settings_.optimality_tolerance * initial_optimality_.total;
   bool converged = optimality_.total <= limit;
+  if (!converged && settings_.acceptance == Acceptance::kPredictedDecrease &&
+      optimality_.total <= 1e-3 * initial_optimality_.total) {
+    // Nothing left that the cost can resolve: the full step's predicted gain is at the rounding
+    // level of I (a trial could not be judged), and the gradient is small.
+    const SwitchingTimeStep full = SolveSwitchingTimeUpdate(
+        *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
+    const double gain = -(pass_.predicted_linear() + 0.5 * pass_.predicted_quadratic() +
+                          full.model_change);
+    converged = gain <= 1e-12 * (1.0 + std::abs(nominal_cost_));
+  }
   if (settings_.step_convergence) {
     const int n = static_cast<int>(step_history_.size());
     bool steps = n >= settings_.delta_i;

@@ -326,3 +326,191 @@ INSTANTIATE_TEST_SUITE_P(Presets, TwoModeLqTest, ::testing::Values(0, 1));
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// The measured cost change of one trial at step size alpha from the nominal of `initial`.
+double MeasuredChange(const Problem& problem, const Plant& /*unused*/, ModelPlant* plant,
+                      const Vector& x0, Policy* initial, LearnerSettings settings, double alpha,
+                      double* predicted) {
+  settings.alpha_initial = alpha;
+  settings.alpha_min = 0.0;
+  Learner learner(problem, settings);
+  Trajectory measured;
+  plant->Run(x0, *initial, &measured);
+  learner.Initialize(measured);
+  plant->Run(x0, learner.NextTrial(), &measured);
+  const TrialResult r = learner.CompleteTrial(measured);
+  if (predicted != nullptr) *predicted = r.predicted;
+  return r.decrease;
+}
+
+// The step of each preset is a descent direction: dI/dalpha < 0 as alpha -> 0, measured on
+// the plant from several nominals (u = 0, a sinusoid, a constant; different planned durations)
+// of the two-mode LQ problem and of the 3-mode nonlinear problem with rectangular resets and
+// surface penalties. For the default preset the predicted slope (the backward pass's
+// linear term plus (31)'s) agrees with the measured one.
+TEST(Learner, EveryPresetStepsDownhill) {
+  TwoModeLq lq;
+  LqProblem two(lq);
+  NonlinearSystem nl_sys;
+  NonlinearCost nl_cost;
+  const Problem nl = MakeNonlinearProblem(nl_sys, nl_cost);
+  struct Case {
+    const Problem* problem;
+    Vector x0, durations;
+    FunctionPolicy::Function input;
+  };
+  const Vector x_nl = (Vector(3) << 0.2, -0.1, 0.3).finished();
+  const std::vector<Case> cases = {
+      {&two.problem, lq.x0, Eigen::Vector2d(1.0, 1.0),
+       [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); }},
+      {&two.problem, lq.x0, Eigen::Vector2d(0.7, 1.4),
+       [](int k, double tau, const ConstVectorRef&, VectorRef u) { u(0) = std::sin(3 * tau) - 0.2 * k; }},
+      {&two.problem, lq.x0, Eigen::Vector2d(1.6, 0.5),
+       [](int, double, const ConstVectorRef&, VectorRef u) { u(0) = -0.8; }},
+      {&nl, x_nl, Eigen::Vector3d(0.5, 0.4, 0.6),
+       [](int k, double tau, const ConstVectorRef&, VectorRef u) {
+         u(0) = 0.3 * std::sin(2.0 * tau) + 0.1 * k;
+         u(1) = 0.2 * std::cos(3.0 * tau) - 0.1;
+       }},
+      {&nl, x_nl, Eigen::Vector3d(0.3, 0.8, 0.5),
+       [](int, double, const ConstVectorRef&, VectorRef u) { u << 0.4, -0.3; }},
+  };
+  int checked = 0;
+  for (const Case& c : cases) {
+    ModelPlantSettings ps;
+    ps.time_based_only = true;  // the planned durations are the trial's
+    ModelPlant plant(*c.problem, ps);
+    for (const Preset preset : {Preset::kDefault, Preset::kPaper}) {
+      const LearnerSettings settings = PresetSettings(preset);
+      FunctionPolicy initial(c.durations, c.input);
+      double pred1 = 0, pred2 = 0;
+      const double a1 = 2e-3, a2 = 1e-3;
+      const double d1 = MeasuredChange(*c.problem, plant, &plant, c.x0, &initial, settings, a1, &pred1);
+      const double d2 = MeasuredChange(*c.problem, plant, &plant, c.x0, &initial, settings, a2, &pred2);
+      // Richardson: the slope at alpha = 0 from the two secants.
+      const double slope = 2.0 * d2 / a2 - d1 / a1;
+      const char* name = preset == Preset::kDefault ? "default" : "paper";
+      EXPECT_LT(slope, 0.0) << name << " case " << checked / 2;
+      EXPECT_LT(d2, 0.0) << name << " case " << checked / 2;
+      if (preset == Preset::kDefault) {
+        const double predicted_slope = 2.0 * pred2 / a2 - pred1 / a1;
+        EXPECT_NEAR(slope, predicted_slope, 0.05 * std::abs(predicted_slope))
+            << "case " << checked / 2;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 10);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// Defect 2 of issue 17: with a cap on the duration steps, runs that start with a duration on (or
+// near) its bound used to stop "converged" with a zero step short of the optimum. From 29 such
+// starts the default learner must either reach the optimum or say that it did not converge.
+TEST(Learner, NeverConvergesShortOfTheOptimumFromStartsOnABound) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  const Optimum opt = DenseSearch(lq, 0.2, 2.0, 0.3, 3.0, 0.01);
+  ModelPlant plant(p.problem);
+  int converged = 0;
+  for (int i = 0; i < 29; ++i) {
+    const Eigen::Vector2d D = i < 15 ? Eigen::Vector2d(0.2 + 0.12 * i, 0.3)
+                                     : Eigen::Vector2d(0.2, 0.3 + 0.19 * (i - 14));
+    FunctionPolicy initial(D, [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+    LearnerSettings settings;
+    settings.switching.max_duration_step = 0.05;
+    settings.max_trials = 120;
+    settings.max_samples = 10000;
+    Learner learner(p.problem, settings);
+    const SolveResult r = learner.Solve(plant, plant, lq.x0, initial);
+    if (r.status != LearnerStatus::kConverged) continue;
+    ++converged;
+    EXPECT_NEAR(r.T(0), opt.D0, 0.01) << "start " << D.transpose();
+    EXPECT_NEAR(r.T(1) - r.T(0), opt.D1, 0.01) << "start " << D.transpose();
+    EXPECT_NEAR(r.cost, opt.cost, 1e-4 * opt.cost) << "start " << D.transpose();
+  }
+  // And the cap is no obstacle: every start gets there within the trials given.
+  EXPECT_EQ(converged, 29);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// Defect 4 of issue 17: the regularization must not bias the answer. On a plain LQR (one mode,
+// fixed horizon, unbounded input) the default learner converges with mu = 0, and its gain
+// L_uz + F_u^T P and cost are the exact LQR ones (an independent RK4 of the Riccati ODE). A
+// fixed regularization of 0.1 (the old default) moved the gain by 6-8 %.
+TEST(Learner, ConvergedLqrGainIsTheExactOne) {
+  Matrix A(2, 2), B(2, 1), Q(2, 2), R(1, 1), S(2, 2);
+  A << 0, 1, -2, -0.5;
+  B << 0, 1;
+  Q << 2, 0, 0, 0.5;
+  R << 0.1;
+  S << 1, 0, 0, 1;
+  const double T = 2.0;
+  LinearSwitchedSystem sys({A}, {B}, {Matrix::Identity(2, 2)});
+  QuadraticCost cost({Q}, {R}, {0.0}, {S}, {Vector::Zero(2)});
+  Problem problem;
+  problem.system = &sys;
+  problem.cost = &cost;
+  const double inf = std::numeric_limits<double>::infinity();
+  problem.bounds.u_min = Vector::Constant(1, -inf);
+  problem.bounds.u_max = Vector::Constant(1, inf);
+  problem.bounds.duration_min = Vector::Constant(1, T);
+  problem.bounds.duration_max = Vector::Constant(1, T);
+  problem.surface_weights = Vector::Zero(1);
+  ModelPlant plant(problem);
+  FunctionPolicy initial(Vector::Constant(1, T),
+                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+  const Vector x0 = Eigen::Vector2d(1.0, -0.5);
+  Learner learner(problem);
+  const SolveResult r = learner.Solve(plant, plant, x0, initial);
+  ASSERT_EQ(r.status, LearnerStatus::kConverged);
+  EXPECT_LE(r.trials, 10);
+  EXPECT_EQ(learner.regularization(), 0.0);
+  // Independent Riccati: -dP/dt = A'P + PA - P B R^-1 B' P + Q, P(T) = S, fine RK4.
+  auto f = [&](const Matrix& P) -> Matrix {
+    return A.transpose() * P + P * A - P * B * R.inverse() * B.transpose() * P + Q;
+  };
+  const int M = 20000;
+  const double h = T / M;
+  std::vector<Matrix> P_ref(M + 1);
+  P_ref[M] = S;
+  for (int i = M; i > 0; --i) {
+    const Matrix& P = P_ref[i];
+    const Matrix k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2), k4 = f(P + h * k3);
+    P_ref[i - 1] = P + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+  }
+  const BackwardPass& pass = learner.backward_pass();
+  const int N = pass.num_samples(0);
+  for (int j : {0, N / 3, 2 * N / 3, N - 2}) {
+    // Interval j's gain is at its midpoint time: D (B^T P) with D = T (tau units).
+    const double t_mid = 0.5 * (learner.nominal().modes[0].t(j) + learner.nominal().modes[0].t(j + 1));
+    const int i = static_cast<int>(std::round(t_mid / h));
+    const Matrix expected = T * B.transpose() * P_ref[i];
+    const Matrix gain = pass.Gain(0, j).leftCols(2);
+    EXPECT_LT((gain - expected).norm(), 1e-4 * expected.norm()) << "j " << j;
+  }
+  const double J = 0.5 * x0.dot(P_ref[0] * x0);
+  EXPECT_NEAR(r.cost, J, 1e-4 * J);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
