@@ -1,0 +1,431 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "standard_problems.h"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+/// Shortest mode the suite allows (s): 10 plant steps at the default dt = 1e-3 s. No
+/// reference optimum has a duration near it.
+constexpr double kMinDuration = 0.01;
+
+/// 1/2 a' M a without temporaries (the engine calls costs inside its loops).
+double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector& c) {
+  double v = 0;
+  for (int j = 0; j < a.size(); ++j) {
+    const double aj = a(j) - (c.size() > 0 ? c(j) : 0.0);
+    for (int i = 0; i < a.size(); ++i) v += (a(i) - (c.size() > 0 ? c(i) : 0.0)) * M(i, j) * aj;
+  }
+  return 0.5 * v;
+}
+
+std::vector<int> StateDims(const LinearQuadraticData& d) {
+  std::vector<int> n;
+  for (int k = 0; k < d.num_modes(); ++k) n.push_back(d.state_dim(k));
+  return n;
+}
+
+/// xdot = A_k x + B_k u, x+ = E_k x (k < K-1): the dynamics of a LinearQuadraticData.
+class LqSystem : public SwitchedSystem {
+ public:
+  explicit LqSystem(const LinearQuadraticData& d)
+      : SwitchedSystem(StateDims(d), d.input_dim()), A_(d.A), B_(d.B), E_(d.E) {}
+
+ protected:
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+              VectorRef xdot) const override {
+    xdot.noalias() = A_[k] * x;
+    if (u.size() > 0) xdot.noalias() += B_[k] * u;
+  }
+  void DoFlowDerivatives(int k, const ConstVectorRef&, const ConstVectorRef&, MatrixRef fx,
+                         MatrixRef fu) const override {
+    fx = A_[k];
+    fu = B_[k];
+  }
+  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
+    x_next.noalias() = E_.at(k) * x;  // k = K-1 (no cycle reset) throws
+  }
+  void DoResetDerivative(int k, const ConstVectorRef&, MatrixRef gx) const override {
+    gx = E_.at(k);
+  }
+
+ private:
+  std::vector<Matrix> A_, B_, E_;  // K n_k x n_k, K n_k x m, K-1 n_{k+1} x n_k
+};
+
+/// l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k,
+/// phi_k = 1/2 (x - s_k)' S_k (x - s_k). Hand-written derivatives.
+class QuadraticTrackingCost : public SwitchedCost {
+ public:
+  QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r, std::vector<Matrix> R,
+                        std::vector<double> rho, std::vector<Matrix> S, std::vector<Vector> s)
+      : Q_(std::move(Q)), r_(std::move(r)), R_(std::move(R)), rho_(std::move(rho)),
+        S_(std::move(S)), s_(std::move(s)) {
+    for (size_t k = 0; k < Q_.size(); ++k) {
+      Qr_.push_back(Q_[k] * r_[k]);
+      Ss_.push_back(S_[k] * s_[k]);
+    }
+  }
+  explicit QuadraticTrackingCost(const LinearQuadraticData& d)
+      : QuadraticTrackingCost(d.Q, d.r, d.R, d.rho, d.S, d.s) {}
+
+ protected:
+  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
+  }
+  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
+                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                            MatrixRef lux) const override {
+    lx.noalias() = Q_[k] * x;
+    lx -= Qr_[k];
+    if (u.size() > 0) lu.noalias() = R_[k] * u;
+    lxx = Q_[k];
+    luu = R_[k];
+    lux.setZero();
+  }
+  double DoSwitching(int k, const ConstVectorRef& x) const override {
+    return HalfQuadraticForm(S_[k], x, s_[k]);
+  }
+  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                              MatrixRef phixx) const override {
+    phix.noalias() = S_[k] * x;
+    phix -= Ss_[k];
+    phixx = S_[k];
+  }
+
+ private:
+  std::vector<Matrix> Q_;   // K, n_k x n_k
+  std::vector<Vector> r_;   // K, n_k
+  std::vector<Matrix> R_;   // K, m x m
+  std::vector<double> rho_; // K
+  std::vector<Matrix> S_;   // K, n_k x n_k
+  std::vector<Vector> s_;   // K, n_k
+  std::vector<Vector> Qr_;  // K, n_k: Q_k r_k
+  std::vector<Vector> Ss_;  // K, n_k: S_k s_k
+};
+
+/// The fishing problem's dynamics (FishingData), m = 0, hand-written derivatives.
+class FishingSystem : public SwitchedSystem {
+ public:
+  explicit FishingSystem(const FishingData& d)
+      : SwitchedSystem(std::vector<int>(d.fishing.size(), 2), 0), d_(d) {}
+
+ protected:
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef&,
+              VectorRef xdot) const override {
+    const double w = d_.fishing[k];
+    xdot(0) = x(0) - x(0) * x(1) - d_.c0 * x(0) * w;
+    xdot(1) = -x(1) + x(0) * x(1) - d_.c1 * x(1) * w;
+  }
+  void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef&, MatrixRef fx,
+                         MatrixRef) const override {
+    const double w = d_.fishing[k];
+    fx(0, 0) = 1 - x(1) - d_.c0 * w;
+    fx(0, 1) = -x(0);
+    fx(1, 0) = x(1);
+    fx(1, 1) = -1 + x(0) - d_.c1 * w;
+  }
+  void DoReset(int, const ConstVectorRef& x, VectorRef x_next) const override { x_next = x; }
+  void DoResetDerivative(int, const ConstVectorRef&, MatrixRef gx) const override {
+    gx.setIdentity();
+  }
+
+ private:
+  FishingData d_;
+};
+
+/// The three modes of Xu & Antsaklis' example 2 (Exp1Data), m = 1, hand-written derivatives.
+class Exp1System : public SwitchedSystem {
+ public:
+  Exp1System() : SwitchedSystem({2, 2, 2}, 1) {}
+
+ protected:
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+              VectorRef xdot) const override {
+    const double v = u(0);
+    if (k == 0) {
+      xdot(0) = x(0) + v * std::sin(x(0));
+      xdot(1) = -x(1) - v * std::cos(x(1));
+    } else if (k == 1) {
+      xdot(0) = x(1) + v * std::sin(x(1));
+      xdot(1) = -x(0) - v * std::cos(x(0));
+    } else {
+      xdot(0) = -x(0) - v * std::sin(x(0));
+      xdot(1) = x(1) + v * std::cos(x(1));
+    }
+  }
+  void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, MatrixRef fx,
+                         MatrixRef fu) const override {
+    const double v = u(0);
+    const double s0 = std::sin(x(0)), c0 = std::cos(x(0));
+    const double s1 = std::sin(x(1)), c1 = std::cos(x(1));
+    if (k == 0) {
+      fx << 1 + v * c0, 0, 0, -1 + v * s1;
+      fu << s0, -c1;
+    } else if (k == 1) {
+      fx << 0, 1 + v * c1, -1 + v * s0, 0;
+      fu << s1, -c0;
+    } else {
+      fx << -1 - v * c0, 0, 0, 1 - v * s1;
+      fu << -s0, c1;
+    }
+  }
+  void DoReset(int, const ConstVectorRef& x, VectorRef x_next) const override { x_next = x; }
+  void DoResetDerivative(int, const ConstVectorRef&, MatrixRef gx) const override {
+    gx.setIdentity();
+  }
+};
+
+/// Bounds of a suite problem: the given input box, durations in [kMinDuration, T] (K > 1) or
+/// [T, T] (K = 1), final time fixed at T, no surface weights.
+void SetBounds(StandardProblem* sp, const Vector& u_min, const Vector& u_max, double t_final) {
+  const int K = sp->system->num_modes();
+  Problem& p = sp->problem;
+  p.system = sp->system.get();
+  p.cost = sp->cost.get();
+  p.bounds.u_min = u_min;
+  p.bounds.u_max = u_max;
+  p.bounds.duration_min = Vector::Constant(K, K == 1 ? t_final : kMinDuration);
+  p.bounds.duration_max = Vector::Constant(K, t_final);
+  p.bounds.FixFinalTime(t_final);
+  p.surface_weights = Vector::Zero(K);
+}
+
+void ZeroInput(int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); }
+
+std::unique_ptr<StandardProblem> FromLq(const LinearQuadraticData& d) {
+  auto sp = std::make_unique<StandardProblem>();
+  sp->system = std::make_unique<LqSystem>(d);
+  sp->cost = std::make_unique<QuadraticTrackingCost>(d);
+  SetBounds(sp.get(), d.u_min, d.u_max, d.final_time);
+  sp->x0 = d.x0;
+  sp->initial_input = ZeroInput;
+  return sp;
+}
+
+Vector Values(std::initializer_list<double> v) {
+  Vector out(static_cast<int>(v.size()));
+  int i = 0;
+  for (double x : v) out(i++) = x;
+  return out;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+LinearQuadraticData LqrData() {
+  LinearQuadraticData d;
+  Matrix A(2, 2), B(2, 1);
+  A << 0, 1, 0, 0;
+  B << 0, 1;
+  d.A = {A};
+  d.B = {B};
+  d.Q = {Matrix::Identity(2, 2)};
+  d.r = {Vector::Zero(2)};
+  d.R = {Matrix::Identity(1, 1)};
+  d.rho = {0.0};
+  d.S = {Matrix::Zero(2, 2)};
+  d.s = {Vector::Zero(2)};
+  d.u_min = Vector::Constant(1, -kInf);
+  d.u_max = Vector::Constant(1, kInf);
+  d.x0 = Values({1, 0});
+  d.final_time = 4;
+  return d;
+}
+
+LinearQuadraticData StoLinearData(int num_modes) {
+  LinearQuadraticData d;
+  Matrix A0(2, 2), A1(2, 2);
+  A0 << -1, 0, 1, 2;
+  A1 << 1, 1, 1, -2;
+  for (int k = 0; k < num_modes; ++k) {
+    d.A.push_back(k % 2 == 0 ? A0 : A1);
+    d.B.push_back(Matrix(2, 0));
+    if (k + 1 < num_modes) d.E.push_back(Matrix::Identity(2, 2));
+    d.Q.push_back(2 * Matrix::Identity(2, 2));  // l = x'x
+    d.r.push_back(Vector::Zero(2));
+    d.R.push_back(Matrix(0, 0));
+    d.rho.push_back(0.0);
+    d.S.push_back(Matrix::Zero(2, 2));
+    d.s.push_back(Vector::Zero(2));
+  }
+  d.u_min = Vector(0);
+  d.u_max = Vector(0);
+  d.x0 = Values({1, 1});
+  d.final_time = 1;
+  return d;
+}
+
+FishingData FishingProblemData(int num_modes) {
+  FishingData d;
+  for (int k = 0; k < num_modes; ++k) d.fishing.push_back(k % 2);
+  d.x0 = Values({0.5, 0.7});
+  return d;
+}
+
+LinearQuadraticData Exp0Data(double u_bound) {
+  LinearQuadraticData d;
+  Matrix A0(2, 2), A1(2, 2), B0(2, 1), B1(2, 1), Q(2, 2);
+  A0 << 0.6, 1.2, -0.8, 3.4;
+  A1 << 4, 3, -1, 0;
+  B0 << 1, 1;
+  B1 << 2, -1;
+  Q << 0, 0, 0, 1;
+  const Vector target = Values({4, 2});
+  d.A = {A0, A1};
+  d.B = {B0, B1};
+  d.E = {Matrix::Identity(2, 2)};
+  d.Q = {Q, Q};
+  d.r = {target, target};
+  d.R = {Matrix::Identity(1, 1), Matrix::Identity(1, 1)};
+  d.rho = {0.0, 0.0};
+  d.S = {Matrix::Zero(2, 2), Matrix::Identity(2, 2)};
+  d.s = {target, target};
+  d.u_min = Vector::Constant(1, -u_bound);
+  d.u_max = Vector::Constant(1, u_bound);
+  d.x0 = Values({0, 2});
+  d.final_time = 2;
+  return d;
+}
+
+Exp1Data Exp1ProblemData() {
+  Exp1Data d;
+  d.target = Values({1, -1});
+  d.x0 = Values({2, 3});
+  d.final_time = 3;
+  return d;
+}
+
+LinearQuadraticData StateSizeData() {
+  LinearQuadraticData d;
+  Matrix A0(2, 2), B0(2, 1), A1(3, 3), B1(3, 1), E(3, 2);
+  A0 << 0, 1, 0, 0;
+  B0 << 0, 1;
+  A1 << 0, 1, 0, -1, -0.4, 0, 1, 0, 0;
+  B1 << 0, 0.5, 0;
+  E << 1, 0, 0, 1, 0, 0;
+  d.A = {A0, A1};
+  d.B = {B0, B1};
+  d.E = {E};
+  d.Q = {Matrix(Values({1, 0.1}).asDiagonal()), Matrix(Values({1, 0.1, 1}).asDiagonal())};
+  d.r = {Vector::Zero(2), Vector::Zero(3)};
+  d.R = {Matrix::Identity(1, 1), Matrix::Identity(1, 1)};
+  d.rho = {0.3, 0.0};
+  d.S = {Matrix::Zero(2, 2), Matrix(Values({2, 1, 2}).asDiagonal())};
+  d.s = {Vector::Zero(2), Vector::Zero(3)};
+  d.u_min = Vector::Constant(1, -kInf);
+  d.u_max = Vector::Constant(1, kInf);
+  d.x0 = Values({1, 0});
+  d.final_time = 3;
+  return d;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+const char* LearnerStatusName(LearnerStatus status) {
+  switch (status) {
+    case LearnerStatus::kRunning: return "running";
+    case LearnerStatus::kConverged: return "converged";
+    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
+    case LearnerStatus::kMaxTrials: return "max_trials";
+  }
+  return "unknown";
+}
+
+std::vector<std::string> StandardProblemNames() {
+  return {"lqr", "sto2_linear", "sto9_linear", "fishing",
+          "exp0", "exp0_bounded", "exp1", "state_size_lq"};
+}
+
+std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
+  std::unique_ptr<StandardProblem> sp;
+  if (name == "lqr") {
+    sp = FromLq(LqrData());
+    sp->citation = "finite-horizon LQR of a double integrator (one mode, T = 4 s)";
+    sp->initial_durations = Values({4});
+    sp->reference_cost = 0.86264301298;
+    sp->reference_T = Values({4});
+  } else if (name == "sto2_linear") {
+    sp = FromLq(StoLinearData(2));
+    sp->citation =
+        "Stellato et al., IEEE TAC 2017 / SwitchTimeOpt.jl test/linsys.jl: two linear modes, "
+        "no input";
+    sp->initial_durations = Values({0.5, 0.5});
+    sp->reference_cost = 5.25454294492;
+    sp->reference_T = Values({0.264866099041, 1});
+  } else if (name == "sto9_linear") {
+    sp = FromLq(StoLinearData(9));
+    sp->citation =
+        "SwitchTimeOpt.jl examples/linear.jl dynamics with 8 switches: nine alternating linear "
+        "modes, no input";
+    sp->initial_durations = Vector::Constant(9, 1.0 / 9);
+    sp->reference_cost = 4.46071496467;
+    sp->reference_T = Values({0.0760134243023, 0.210006059983, 0.305285325056, 0.443551715601,
+                              0.534431631762, 0.679256572495, 0.764891105875, 0.92075699038, 1});
+  } else if (name == "fishing") {
+    const FishingData d = FishingProblemData(3);
+    sp = std::make_unique<StandardProblem>();
+    sp->system = std::make_unique<FishingSystem>(d);
+    const Matrix Q = 2 * d.weight * Matrix::Identity(2, 2);
+    sp->cost = std::make_unique<QuadraticTrackingCost>(
+        std::vector<Matrix>(3, Q), std::vector<Vector>(3, Vector::Ones(2)),
+        std::vector<Matrix>(3, Matrix(0, 0)), std::vector<double>(3, 0.0),
+        std::vector<Matrix>(3, Matrix::Zero(2, 2)), std::vector<Vector>(3, Vector::Zero(2)));
+    SetBounds(sp.get(), Vector(0), Vector(0), d.final_time);
+    sp->x0 = d.x0;
+    sp->initial_input = ZeroInput;
+    sp->citation =
+        "Lotka-Volterra fishing (Sager 2012; SwitchTimeOpt.jl examples/fishing.jl), one fishing "
+        "interval, no input";
+    sp->initial_durations = Values({4, 4, 4});
+    sp->reference_cost = 0.691377708023;
+    sp->reference_T = Values({2.61213321936, 4.34088778443, 12});
+  } else if (name == "exp0" || name == "exp0_bounded") {
+    const bool bounded = name == "exp0_bounded";
+    sp = FromLq(Exp0Data(bounded ? kExp0InputBound : kInf));
+    sp->citation = "Xu & Antsaklis, IEEE TAC 2004, example 1 (OCS2 EXP0)";
+    if (bounded) sp->citation += " with |u| <= 8 (active at the optimum)";
+    sp->bounds_active = bounded;
+    sp->initial_durations = Values({1, 1});
+    sp->reference_cost = bounded ? 11.3589491026 : 9.76654882536;
+    sp->reference_T = Values({bounded ? 0.317209912689 : 0.189671105461, 2});
+  } else if (name == "exp1") {
+    const Exp1Data d = Exp1ProblemData();
+    sp = std::make_unique<StandardProblem>();
+    sp->system = std::make_unique<Exp1System>();
+    std::vector<Matrix> S(3, Matrix::Zero(2, 2));
+    S[2] = Matrix::Identity(2, 2);
+    sp->cost = std::make_unique<QuadraticTrackingCost>(
+        std::vector<Matrix>(3, Matrix::Identity(2, 2)), std::vector<Vector>(3, d.target),
+        std::vector<Matrix>(3, Matrix::Identity(1, 1)), std::vector<double>(3, 0.0), S,
+        std::vector<Vector>(3, d.target));
+    SetBounds(sp.get(), Vector::Constant(1, -kInf), Vector::Constant(1, kInf), d.final_time);
+    sp->x0 = d.x0;
+    sp->initial_input = ZeroInput;
+    sp->citation = "Xu & Antsaklis, IEEE TAC 2004, example 2 (OCS2 EXP1): three nonlinear modes";
+    sp->initial_durations = Values({1, 1, 1});
+    sp->reference_cost = 5.44097350240;
+    sp->reference_T = Values({0.224518463358, 1.02002462586, 3});
+  } else if (name == "state_size_lq") {
+    sp = FromLq(StateSizeData());
+    sp->citation =
+        "constructed for this suite: LQ, 2 states then 3 (rectangular reset [I; 0])";
+    sp->initial_durations = Values({1.5, 1.5});
+    sp->reference_cost = 1.22282454645;
+    sp->reference_T = Values({1.19006843338, 3});
+  } else {
+    throw InvalidArgument("MakeStandardProblem: unknown problem '" + name + "'");
+  }
+  sp->name = name;
+  sp->problem.Validate();
+  return sp;
+}
+
+}  // namespace testing
+}  // namespace ddoc
