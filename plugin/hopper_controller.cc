@@ -53,7 +53,7 @@ LearnerSettings HopperLearnerDefaults() {
   s.step_convergence = true;
   s.c = 1e-7;
   s.gamma = 0.5;
-  s.reset_alpha_on_accept = false;
+  s.alpha_after_accept = AlphaAfterAccept::kGrow;
   s.regularization_min = 0.01;
   s.backward.integrator = BackwardIntegrator::kRk4;
   s.backward.psd_switching_hessians = true;

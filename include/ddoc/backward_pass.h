@@ -203,6 +203,7 @@ class BackwardPass {
                   const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                   bool store_mid, int s);
   bool Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic);
+  void IntegrateStep(int k, int n, double h, int s, bool store, double interval);
   void JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic);
   bool EventProjection(int k, const Trajectory& nominal);
   void StoreState(int k, int j);

@@ -29,6 +29,16 @@ enum class Acceptance {
   kPredictedDecrease,
 };
 
+/// How alpha changes after an accepted trial.
+enum class AlphaAfterAccept {
+  kReset,  ///< alpha <- alpha_initial: Algorithm 1 as printed
+  kGrow,   ///< alpha <- min(alpha_initial, alpha / gamma)
+  /// From the ratio rho of the measured to the predicted change (a trust-region rule): rho > 0.75
+  /// doubles alpha (capped at alpha_initial), rho < 0.25 halves it, else it stays. With
+  /// kSufficientDecrease (no prediction) it is kReset.
+  kRatio,
+};
+
 /// Settings of Learner (Algorithm 1). `LearnerSettings{}` is the recommended default (box-aware
 /// Riccati backward pass with exact time curvature, alpha on the feed-forward, Armijo on the
 /// predicted decrease with interpolated backtracking, Levenberg-Marquardt regularization that
@@ -46,23 +56,22 @@ struct LearnerSettings {
   /// and the predicted slope, clamped to [0.1 alpha, gamma alpha] (true, default); false: gamma
   /// alpha (the paper).
   bool interpolate_backtracking = true;
-  double alpha_initial = 1.0;   ///< alpha at the start and after every accepted trial, in (0, 1]
-  /// Algorithm 1 restarts every iteration at alpha = alpha_initial (true, default). false: after
-  /// an accepted trial alpha <- min(alpha_initial, alpha / gamma).
-  bool reset_alpha_on_accept = true;
+  double alpha_initial = 1.0;   ///< alpha at the start, in (0, 1]
+  /// alpha after an accepted trial (AlphaAfterAccept). Default kRatio.
+  AlphaAfterAccept alpha_after_accept = AlphaAfterAccept::kRatio;
   double alpha_min = 1e-6;      ///< line search fails (terminated) when alpha drops below
-  /// Algorithm 1's convergence test: int |du|^2 dtau + |dT|^2 <= epsilon for the last delta_i
-  /// accepted iterations (step_convergence, the paper preset), together with the optimality
-  /// guard below. Default off: convergence is the optimality test alone.
+  /// Convergence (default preset): the full step's predicted gain (the Newton decrement,
+  /// -dI_pred(1)) at most convergence_tolerance (1 + |I|). Default 1e-9.
+  double convergence_tolerance = 1e-9;
+  /// Algorithm 1's convergence test instead (the paper preset): int |du|^2 dtau + |dT|^2 <=
+  /// epsilon for the last delta_i accepted iterations. Default off.
   bool step_convergence = false;
   double epsilon = 1e-8;        ///< threshold of the step test
   int delta_i = 2;              ///< Delta i of the step test
-  /// First-order optimality (ComputeOptimality: the projected gradient w.r.t. u(.) and T) at
-  /// which the learner has converged, relative to its value at the initial nominal. Default
-  /// 1e-6. With kPredictedDecrease it has also converged when the full step's predicted gain is
-  /// at the rounding level of the cost (1e-12 (1 + |I|)) and the optimality is below 1e-3 of
-  /// its initial value; no test reports convergence above that.
-  double optimality_tolerance = 1e-6;
+  /// The guard of both tests: no convergence while the first-order optimality
+  /// (ComputeOptimality: the projected gradient w.r.t. u(.) and T) is above this fraction of its
+  /// value at the initial nominal. Default 1e-3.
+  double optimality_tolerance = 1e-3;
   /// Floor of the Levenberg-Marquardt regularization mu of H = L_uu + mu I (units of
   /// L_uu = D l_uu): mu starts here, grows 10x when the backward pass fails (not positive
   /// definite, non-finite), shrinks 10x after each accepted trial, never below the floor.

@@ -87,7 +87,10 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
     config.learner.regularization_min = *l.regularization;
     config.model_learner.regularization_min = *l.regularization;
   }
-  if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
+  if (l.reset_alpha_on_accept) {
+    config.learner.alpha_after_accept =
+        *l.reset_alpha_on_accept ? AlphaAfterAccept::kReset : AlphaAfterAccept::kGrow;
+  }
   if (l.alpha_initial) config.learner.alpha_initial = *l.alpha_initial;
   if (l.cyclic_value) {
     config.learner.backward.cyclic_value = *l.cyclic_value;

@@ -382,6 +382,13 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
   if (store_mid) {
     Eigen::Map<Matrix> gain(gain_store_.col(s).data(), m, nz);
     if (m > 0) gain = M.transpose();
+    if (riccati) {
+      // Box-constrained DDP: the inputs clamped on this interval get no feedback (their rows of
+      // the gain are zero), as P assumed.
+      for (int i = 0; i < m; ++i) {
+        if (c_.Hinv(i, i) == 0.0) gain.row(i).setZero();
+      }
+    }
     ff_store_.col(s) = gu_;
     auto grad = grad_store_.col(s);
     if (m > 0) TransposeTimes(fu, separate_lambda ? lam.head(n) : px, grad);
@@ -507,10 +514,86 @@ void BackwardPass::JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic)
   }
 }
 
+void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, double interval) {
+  // One midpoint (or RK4) step of length h backward from (P_, p_, lam_) with the interval's
+  // constant coefficients; `store` writes the mid-stage outputs of sample s, with the predicted
+  // decrease weighted by the whole interval's length.
+  const int nz = n + K_;
+  const bool rk4 = settings_.integrator == BackwardIntegrator::kRk4;
+  const bool riccati = settings_.equation == BackwardEquation::kRiccati;
+  auto P = P_.topLeftCorner(nz, nz);
+  auto p = p_.head(nz);
+  auto lam = lam_.head(nz);
+  auto Ps = Ps_.topLeftCorner(nz, nz);
+  auto ps = ps_.head(nz);
+  auto lams = lams_.head(nz);
+  auto d0 = dP_[0].topLeftCorner(nz, nz);
+  auto d1 = dP_[1].topLeftCorner(nz, nz);
+  auto e0 = dp_[0].head(nz);
+  auto e1 = dp_[1].head(nz);
+  auto l0 = dlam_[0].head(nz);
+  auto l1 = dlam_[1].head(nz);
+  const bool separate_lambda = riccati || settings_.use_previous_du;
+  // Stage 1 at the right end, stage 2 at the midpoint (its outputs are the interval's).
+  const int ld = nz_max_;
+  const double* lxx = c_.lxx.data();
+  const int ldl = static_cast<int>(c_.lxx.outerStride());
+  const int ldr = static_cast<int>(tmp_.outerStride());
+  auto R = [&]() -> const double* { return riccati_term_ ? tmp_.data() : nullptr; };
+  const double D = c_.D;
+  Derivative(k, n, P, p, lam, d0, e0, l0, false, s);
+  if (!rk4) {
+    Symmetrize<SymKind::kStage>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
+                                Ps.data(), ld, 0.5 * h);
+  } else {
+    Symmetrize<SymKind::kStore>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d0.data(),
+                                ld, 0.0);
+    Ps = P + (0.5 * h) * d0;
+  }
+  ps = p + (0.5 * h) * e0;
+  if (separate_lambda) lams = lam + (0.5 * h) * l0;
+  Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d1, e1, l1, store, s);
+  if (riccati && store) {
+    predicted_linear_ += interval * k_.dot(gu_);
+    tmpm_.noalias() = c_.H * k_;
+    predicted_quadratic_ += interval * k_.dot(tmpm_);
+  }
+  if (!rk4) {
+    Symmetrize<SymKind::kStep>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld, nullptr,
+                               ld, h);
+    p += h * e1;
+    if (separate_lambda) lam += h * l1;
+  } else {
+    auto d2 = dP_[2].topLeftCorner(nz, nz);
+    auto d3 = dP_[3].topLeftCorner(nz, nz);
+    auto e2 = dp_[2].head(nz);
+    auto e3 = dp_[3].head(nz);
+    auto l2 = dlam_[2].head(nz);
+    auto l3 = dlam_[3].head(nz);
+    Symmetrize<SymKind::kStore>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d1.data(),
+                                ld, 0.0);
+    Ps = P + (0.5 * h) * d1;
+    ps = p + (0.5 * h) * e1;
+    if (separate_lambda) lams = lam + (0.5 * h) * l1;
+    Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d2, e2, l2, false, s);
+    Symmetrize<SymKind::kStore>(nz, n, d2.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d2.data(),
+                                ld, 0.0);
+    Ps = P + h * d2;
+    ps = p + h * e2;
+    if (separate_lambda) lams = lam + h * l2;
+    Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d3, e3, l3, false, s);
+    Symmetrize<SymKind::kStore>(nz, n, d3.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d3.data(),
+                                ld, 0.0);
+    P += (h / 6.0) * (d0 + 2.0 * d1 + 2.0 * d2 + d3);
+    p += (h / 6.0) * (e0 + 2.0 * e1 + 2.0 * e2 + e3);
+    if (separate_lambda) lam += (h / 6.0) * (l0 + 2.0 * l1 + 2.0 * l2 + l3);
+  }
+  if (!separate_lambda) lam = p;
+}
+
 bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic) {
   predicted_linear_ = 0;
   predicted_quadratic_ = 0;
-  const bool rk4 = settings_.integrator == BackwardIntegrator::kRk4;
   const bool riccati = settings_.equation == BackwardEquation::kRiccati;
   for (int k = K_ - 1; k >= 0; --k) {
     const int n = dims_[k];
@@ -520,10 +603,6 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
     StoreState(k, N - 1);
     auto P = P_.topLeftCorner(nz, nz);
     auto p = p_.head(nz);
-    auto lam = lam_.head(nz);
-    auto Ps = Ps_.topLeftCorner(nz, nz);
-    auto ps = ps_.head(nz);
-    auto lams = lams_.head(nz);
     for (int j = N - 2; j >= 0; --j) {
       const int s = index(k, j);
       Evaluate(k, nominal, j, du_prev);
@@ -532,68 +611,18 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
         return false;
       }
       const double h = tau_(s + 1) - tau_(s);
-      auto d0 = dP_[0].topLeftCorner(nz, nz);
-      auto d1 = dP_[1].topLeftCorner(nz, nz);
-      auto e0 = dp_[0].head(nz);
-      auto e1 = dp_[1].head(nz);
-      auto l0 = dlam_[0].head(nz);
-      auto l1 = dlam_[1].head(nz);
-      const bool separate_lambda = riccati || settings_.use_previous_du;
-      // Stage 1 at the right end, stage 2 at the midpoint (its outputs are the interval's).
-      const int ld = nz_max_;
-      const double* lxx = c_.lxx.data();
-      const int ldl = static_cast<int>(c_.lxx.outerStride());
-      const int ldr = static_cast<int>(tmp_.outerStride());
-      auto R = [&]() -> const double* { return riccati_term_ ? tmp_.data() : nullptr; };
-      const double D = c_.D;
-      Derivative(k, n, P, p, lam, d0, e0, l0, false, s);
-      if (!rk4) {
-        Symmetrize<SymKind::kStage>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
-                                    Ps.data(), ld, 0.5 * h);
-      } else {
-        Symmetrize<SymKind::kStore>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
-                                    d0.data(), ld, 0.0);
-        Ps = P + (0.5 * h) * d0;
+      // Sub-steps where the Riccati term makes the equation stiff for an explicit step: the
+      // linearization of -P B H^-1 B^T P has norm ~ |F_u|^2 |H_FF^-1| |P|; keep h times it
+      // (and |D f_x|) below 1 (explicit midpoint is stable up to 2 on the real axis).
+      int substeps = 1;
+      if (riccati && m_ > 0 && h > 0) {
+        const double fu2 = c_.fu.topRows(n).squaredNorm();
+        const double stiff = fu2 * c_.Hinv.norm() * P.norm() + c_.fx.topLeftCorner(n, n).norm();
+        if (h * stiff > 1.0) substeps = static_cast<int>(std::min(1000.0, std::ceil(h * stiff)));
       }
-      ps = p + (0.5 * h) * e0;
-      if (separate_lambda) lams = lam + (0.5 * h) * l0;
-      Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d1, e1, l1, true, s);
-      if (riccati) {
-        predicted_linear_ += h * k_.dot(gu_);
-        tmpm_.noalias() = c_.H * k_;
-        predicted_quadratic_ += h * k_.dot(tmpm_);
+      for (int sub = 0; sub < substeps; ++sub) {
+        IntegrateStep(k, n, h / substeps, s, sub == substeps / 2, h);
       }
-      if (!rk4) {
-        Symmetrize<SymKind::kStep>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
-                                   nullptr, ld, h);
-        p += h * e1;
-        if (separate_lambda) lam += h * l1;
-      } else {
-        auto d2 = dP_[2].topLeftCorner(nz, nz);
-        auto d3 = dP_[3].topLeftCorner(nz, nz);
-        auto e2 = dp_[2].head(nz);
-        auto e3 = dp_[3].head(nz);
-        auto l2 = dlam_[2].head(nz);
-        auto l3 = dlam_[3].head(nz);
-        Symmetrize<SymKind::kStore>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
-                                    d1.data(), ld, 0.0);
-        Ps = P + (0.5 * h) * d1;
-        ps = p + (0.5 * h) * e1;
-        if (separate_lambda) lams = lam + (0.5 * h) * l1;
-        Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d2, e2, l2, false, s);
-        Symmetrize<SymKind::kStore>(nz, n, d2.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
-                                    d2.data(), ld, 0.0);
-        Ps = P + h * d2;
-        ps = p + h * e2;
-        if (separate_lambda) lams = lam + h * l2;
-        Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d3, e3, l3, false, s);
-        Symmetrize<SymKind::kStore>(nz, n, d3.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld,
-                                    d3.data(), ld, 0.0);
-        P += (h / 6.0) * (d0 + 2.0 * d1 + 2.0 * d2 + d3);
-        p += (h / 6.0) * (e0 + 2.0 * e1 + 2.0 * e2 + e3);
-        if (separate_lambda) lam += (h / 6.0) * (l0 + 2.0 * l1 + 2.0 * l2 + l3);
-      }
-      if (!separate_lambda) lam = p;
       StoreState(k, j);
     }
     CopyOutputs(index(k, N - 2), index(k, N - 1));

@@ -42,6 +42,7 @@ LearnerSettings LearnerSettings::Paper() {
   LearnerSettings s;
   s.acceptance = Acceptance::kSufficientDecrease;
   s.interpolate_backtracking = false;
+  s.alpha_after_accept = AlphaAfterAccept::kReset;
   s.step_convergence = true;
   s.backward.equation = BackwardEquation::kLyapunov;
   s.backward.time_curvature = false;
@@ -120,6 +121,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
+  CheckSetting(settings.convergence_tolerance >= 0 && std::isfinite(settings.convergence_tolerance),
+               "convergence_tolerance must be finite and >= 0");
   CheckSetting(settings.regularization_min >= 0 && std::isfinite(settings.regularization_min),
                "regularization_min must be finite and >= 0");
   CheckSetting(settings.max_trials >= 1, "max_trials must be >= 1");
@@ -182,25 +185,26 @@ void Learner::RecomputeDirection() {
 }
 
 void Learner::UpdateConvergence() {
-  const double limit = settings_.optimality_tolerance * initial_optimality_.total;
-  bool converged = optimality_.total <= limit;
-  if (!converged && settings_.acceptance == Acceptance::kPredictedDecrease &&
-      optimality_.total <= 1e-3 * initial_optimality_.total) {
-    // Nothing left that the cost can resolve: the full step's predicted gain is at the rounding
-    // level of I (a trial could not be judged), and the gradient is small.
-    const SwitchingTimeStep full = SolveSwitchingTimeUpdate(
-        *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
-    const double gain = -(pass_.predicted_linear() + 0.5 * pass_.predicted_quadratic() +
-                          full.model_change);
-    converged = gain <= 1e-12 * (1.0 + std::abs(nominal_cost_));
-  }
+  // The guard of every test: the projected gradient must have come down by
+  // optimality_tolerance from the initial nominal.
+  const bool small_gradient =
+      optimality_.total <= settings_.optimality_tolerance * initial_optimality_.total;
+  bool converged = false;
   if (settings_.step_convergence) {
+    // Algorithm 1's test: int |du|^2 + |dT|^2 <= epsilon for the last delta_i accepted trials.
     const int n = static_cast<int>(step_history_.size());
     bool steps = n >= settings_.delta_i;
     for (int i = std::max(0, n - settings_.delta_i); i < n && steps; ++i) {
       steps = step_history_[i] <= settings_.epsilon;
     }
-    converged = converged && steps;
+    converged = small_gradient && steps;
+  } else if (small_gradient) {
+    // The full step's predicted gain (the Newton decrement) below convergence_tolerance |I|.
+    const SwitchingTimeStep full = SolveSwitchingTimeUpdate(
+        *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
+    const double gain = -(pass_.predicted_linear() + 0.5 * pass_.predicted_quadratic() +
+                          full.model_change);
+    converged = gain <= settings_.convergence_tolerance * (1.0 + std::abs(nominal_cost_));
   }
   status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
 }
@@ -357,9 +361,20 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     step_history_.push_back(r.step);
     accepted_ = active_;
     active_ = 1 - active_;
-    alpha_ = settings_.reset_alpha_on_accept
-                 ? settings_.alpha_initial
-                 : std::min(settings_.alpha_initial, alpha_ / settings_.gamma);
+    const bool ratio = settings_.alpha_after_accept == AlphaAfterAccept::kRatio &&
+                       settings_.acceptance == Acceptance::kPredictedDecrease && r.predicted < 0;
+    if (ratio) {
+      const double rho = r.decrease / r.predicted;
+      if (rho > 0.75) {
+        alpha_ = std::min(settings_.alpha_initial, 2.0 * alpha_);
+      } else if (rho < 0.25) {
+        alpha_ = std::max(0.5 * alpha_, settings_.alpha_min);
+      }
+    } else if (settings_.alpha_after_accept == AlphaAfterAccept::kGrow) {
+      alpha_ = std::min(settings_.alpha_initial, alpha_ / settings_.gamma);
+    } else {
+      alpha_ = settings_.alpha_initial;
+    }
     // Levenberg-Marquardt: the regularization shrinks after a success (to the floor).
     mu_ = std::max(settings_.regularization_min, 0.1 * mu_);
     if (mu_ < 1e-6 * luu_scale_) mu_ = settings_.regularization_min;

@@ -139,7 +139,14 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
       const auto gain = pass.Gain(k, j);
       Eigen::Map<Matrix>(Kx_.col(s).data(), m_, n) = gain.leftCols(n);
       auto c = c_.col(s);
-      c = alpha * pass.Feedforward(k, j);
+      if (scale_all) {
+        c = alpha * pass.Feedforward(k, j);  // (34) as printed
+      } else {
+        // kRiccati: the feed-forward is the full step k of the pass's box QP, scaled by alpha
+        // (box-constrained DDP): with dx = 0 the QP's minimizer is alpha k, which lies in the
+        // box for alpha <= 1. Unconstrained, -H k is L_u + F_u^T p, the printed constant.
+        c.noalias() = -alpha * (pass.Hessian(k, j) * pass.Step(k, j));
+      }
       c.noalias() += (scale_all ? alpha : 1.0) * (gain.rightCols(K_) * dT);
       huu_.col(s) = Eigen::Map<const Vector>(pass.Hessian(k, j).data(), m_ * m_);
     }

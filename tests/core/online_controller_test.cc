@@ -80,7 +80,9 @@ Vector IndependentB(const ControlSetup& s, int k, int j, const Vector& scaled_dx
   if (s.pass.settings().equation == BackwardEquation::kLyapunov) {
     return alpha * (feedback + s.pass.Feedforward(k, j));
   }
-  return feedback + alpha * s.pass.Feedforward(k, j);
+  // kRiccati: the feed-forward is the pass's full box step k, as -H k (alpha k minimizes the QP
+  // at dx = 0, dT = 0).
+  return feedback - alpha * Matrix(s.pass.Hessian(k, j)) * s.pass.Step(k, j);
 }
 
 

@@ -230,7 +230,8 @@ int main(int argc, char** argv) {
   ls.gamma = a.Get("gamma", 0.5);
   ls.alpha_initial = a.Get("alpha0", 1.0);
   ls.alpha_min = std::min(1e-6, 0.5 * ls.alpha_initial);
-  ls.reset_alpha_on_accept = a.Get("grow", 1) == 0;
+  ls.alpha_after_accept =
+      a.Get("grow", 1) != 0 ? AlphaAfterAccept::kGrow : AlphaAfterAccept::kReset;
   ls.regularization_min = a.Get("reg", 0.1);
   ls.backward.cyclic_value = a.Get("cyclic", 0.0);
   ls.backward.terminal_event = a.Get("event", 0) != 0;
