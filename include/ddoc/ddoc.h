@@ -20,6 +20,7 @@
 #include "ddoc/switching_time_update.h"
 #include "ddoc/time_normalization.h"
 #include "ddoc/trajectory.h"
+#include "ddoc/trial_driver.h"
 #include "ddoc/types.h"
 
 #endif  // DDOC_DDOC_H_
