@@ -21,18 +21,6 @@ Bounds HopperBounds(const ControllerConfig& c) {
   return b;
 }
 
-// True when a contact between the foot geom and the floor geom exists in the current collision
-// pass (computed by mj_fwdPosition before mjcb_control) with distance below `distance`.
-bool FootTouches(const HopperMapping& map, const mjData* d, double distance) {
-  for (int i = 0; i < d->ncon; ++i) {
-    const mjContact& c = d->contact[i];
-    const bool pair = (c.geom1 == map.geom_foot && c.geom2 == map.geom_floor) ||
-                      (c.geom2 == map.geom_foot && c.geom1 == map.geom_floor);
-    if (pair && c.dist < distance) return true;
-  }
-  return false;
-}
-
 // (x, y, xd, yd) of a flight-coordinate state.
 Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
   return Eigen::Vector4d(xf(hopper::kX), xf(hopper::kY), xf(hopper::kXd), xf(hopper::kYd));
@@ -68,7 +56,8 @@ HopperController::HopperController(const mjModel* m, const ControllerConfig& con
       problem_{&model_, &cost_, HopperBounds(config),
                Eigen::Vector2d(cost_.weights().surface_weight, 0.0)},
       model_plant_(problem_),
-      vsa_(map_.beta) {}
+      vsa_(map_.beta),
+      detector_(config.contact) {}
 
 std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
                                                            const ControllerConfig& config,
@@ -99,8 +88,6 @@ void HopperController::Initialize() {
     }
   };
   positive(c.dt_model, "dt_model");
-  positive(c.min_phase_time, "min_phase_time");
-  positive(c.takeoff_force, "takeoff_force");
   if (c.initial_hops < 1) {
     throw InvalidArgument("config.initial_hops must be >= 1, got " +
                           std::to_string(c.initial_hops));
@@ -162,9 +149,9 @@ void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double*
   VsaState vs;
   WriteFlightState(map_, x, d, &vs);
   vsa_.Reset(vs);
-  mode_ = hopper::kFlight;
+  // The state is a takeoff: the foot starts on the ground, no phase change for min_phase_time.
+  detector_.Reset(hopper::kFlight, t);
   started_ = false;  // the next step begins the hop (BeginHop) at this state
-  last_event_ = t;   // the state is a takeoff: the foot starts on the ground
   have_prev_td_ = false;
   stance_first_ = false;
 }
@@ -273,9 +260,9 @@ void HopperController::LoadPhaseTable() {
 }
 
 double HopperController::PolicyTime(double t_in_mode, const double* x) {
-  const double D = policy_->PlannedDuration(mode_);
+  const double D = policy_->PlannedDuration(mode());
   if (!std::isfinite(t_in_mode)) return t_in_mode;
-  if (mode_ == hopper::kFlight) {
+  if (mode() == hopper::kFlight) {
     const double y = x[hopper::kY], yd = x[hopper::kYd];
     const double g = config_.model.g;
     const double rem = (yd + std::sqrt(yd * yd + 2.0 * g * std::max(0.0, y - phase_y_td_))) / g;
@@ -304,7 +291,6 @@ void HopperController::BeginHop(double t, const mjData* d) {
   recorder_.BeginMode(hopper::kFlight);
   hop_start_ = t;
   phase_start_ = t;
-  mode_ = hopper::kFlight;
   x0_hop_ = xf_;
   hop_x_start_ = xf_(hopper::kX);
   apex_ = xf_(hopper::kY);
@@ -325,13 +311,10 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
   const double step = t - last_time_;
   last_time_ = t;
 
-  // Phase detection. Touchdown: the collision pass of this step (run before mjcb_control) has
-  // a foot-floor contact, so the current state is the last one before the impact. Takeoff:
-  // the floor's vertical force on the robot, solved in the previous step (qfrc_constraint is
-  // not recomputed until after this callback), has dropped below the threshold.
-  const bool may_switch = t - last_event_ >= config_.min_phase_time;
-  if (mode_ == hopper::kFlight && may_switch &&
-      FootTouches(map_, d, config_.touchdown_distance)) {
+  // Phase detection (ContactPhaseDetector): at a touchdown the current state is the last one
+  // before the impact, at a takeoff the first one of the flight.
+  const ContactChange change = detector_.Update(map_, d);
+  if (change == ContactChange::kTouchdown) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
     if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
     recorder_.AddSample(t - hop_start_, xf_, u_);  // x^-(T1)
@@ -342,23 +325,19 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
     t_touchdown_ = t;
     foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
     foot_td_h_ = HopperModel::FootHeight(xf_);
-    mode_ = hopper::kStance;
     phase_start_ = t;
-    last_event_ = t;
     stance_first_ = true;
     phase_best_ = -1e9;
-  } else if (mode_ == hopper::kStance && may_switch &&
-             d->qfrc_constraint[map_.dof_z] < config_.takeoff_force) {
+  } else if (change == ContactChange::kTakeoff) {
     EndHop();
     BeginHop(t, d);
     reports_.back().body_takeoff = BodyState(xf_);
-    last_event_ = t;
   }
 
   // The measured state in the model's coordinates of the current mode.
   double* x = nullptr;
   int n = 0;
-  if (mode_ == hopper::kFlight) {
+  if (mode() == hopper::kFlight) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
     if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
     x = xf_.data();
@@ -378,14 +357,14 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
   // Online update (33)-(35): the policy clamps into the bounds and never returns NaN for a
   // non-finite state; Sanitize() is the last guard.
   const double t_in_mode = t - phase_start_;
-  policy_->Step(mode_, config_.phase_time ? PolicyTime(t_in_mode, x) : t_in_mode, xm, u_);
+  policy_->Step(mode(), config_.phase_time ? PolicyTime(t_in_mode, x) : t_in_mode, xm, u_);
   Sanitize();
   effort_ += cost_.InputCost(u_) * std::max(step, map_.timestep);
 
   // Record the sample. The touchdown step already holds x^-(T1) as the flight mode's last
   // sample; the first stance sample is the first post-impact measurement (the next step),
   // stamped at the switching instant T1.
-  if (mode_ == hopper::kStance && stance_first_) {
+  if (mode() == hopper::kStance && stance_first_) {
     if (t > t_touchdown_) {
       recorder_.AddSample(t_touchdown_ - hop_start_, xm, u_);
       stance_first_ = false;
@@ -393,7 +372,7 @@ void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
   } else if (xm.allFinite()) {
     recorder_.AddSample(t - hop_start_, xm, u_);
   }
-  if (mode_ == hopper::kStance) last_stance_ = xs_;
+  if (mode() == hopper::kStance) last_stance_ = xs_;
 }
 
 void HopperController::EndHop() {

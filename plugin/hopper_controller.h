@@ -27,6 +27,7 @@
 #include "ddoc/hopper/nominal_gait.h"
 #include "ddoc/hopper/vsa.h"
 #include "ddoc/learner.h"
+#include "ddoc/mujoco/contact_phase.h"
 #include "ddoc/mujoco/hopper_mapping.h"
 #include "ddoc/plant.h"
 
@@ -93,12 +94,7 @@ struct ControllerConfig {
   double dt_model = 1e-3;             ///< RK4 step of the model plant, s
   double flight_min = 0.05, flight_max = 1.5;  ///< duration bounds of the flight mode, s
   double stance_min = 0.05, stance_max = 1.0;  ///< duration bounds of the stance mode, s
-  /// Touchdown: a foot-floor contact of the current collision pass with distance below this (m).
-  double touchdown_distance = 0.0;
-  /// Takeoff: the floor's vertical force on the robot (previous step) below this (N).
-  double takeoff_force = 0.5;
-  /// No phase change within this time after the previous one (s).
-  double min_phase_time = 0.03;
+  ContactPhaseSettings contact;       ///< the contact-phase detector (src/mujoco)
   int max_samples_per_mode = 4000;    ///< preallocated samples per mode (1 ms steps)
   /// Hops run with the initial law u^0, T^0 (OC-FB) before Algorithm 1 / mRL start; the last
   /// of them is the measured trial of "Initialize" (I^0, x^0). 1 = Algorithm 1 as printed
@@ -253,7 +249,7 @@ class HopperController {
   std::vector<HopReport> TakeReports();
 
   // Observers for logging (read after mj_step, outside the callback).
-  int mode() const { return mode_; }                       ///< hopper::kFlight / kStance
+  int mode() const { return detector_.mode(); }            ///< hopper::kFlight / kStance
   int hop() const { return hop_; }                         ///< index of the running hop
   const double* last_input() const { return u_.data(); }   ///< 4: u applied at the last step
   const VsaState& vsa() const { return vsa_.state(); }
@@ -323,7 +319,7 @@ class HopperController {
   Eigen::Vector4d body_td_ = Eigen::Vector4d::Zero();  // COM (x, y, xd, yd) at touchdown
 
   // Phase and hop bookkeeping.
-  int mode_ = hopper::kFlight;
+  ContactPhaseDetector detector_;
   int hop_ = 0;
   bool started_ = false;        // first step after Reset seen
   bool in_compute_ = false;     // re-entry guard
@@ -332,7 +328,6 @@ class HopperController {
   double last_time_ = 0.0;      // simulated time of the last new step
   double phase_start_ = 0.0;    // absolute time the current mode started
   double hop_start_ = 0.0;      // absolute time the hop started (trial t = 0)
-  double last_event_ = -1e9;    // absolute time of the last phase change
   double hop_x_start_ = 0.0;    // COM x at the hop start
   double apex_ = 0.0;           // max y in this hop's flight
   double foot_td_x_ = 0.0, prev_foot_td_x_ = 0.0, foot_td_h_ = 0.0;

@@ -123,7 +123,7 @@ TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
   int mode = c.mode();
   double first_force_time = -1, touchdown_time = -1, takeoff_time = -1;
   std::vector<double> force_gone;  // steps after which the force dropped below the threshold
-  const double threshold = c.config().takeoff_force;
+  const double threshold = c.config().contact.takeoff_force;
   double prev_force = 0;
   while (c.hop() < 1 && rig.d()->time < 2.0) {
     const double t_before = rig.d()->time;

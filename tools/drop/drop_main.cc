@@ -3,9 +3,9 @@
 // ddoc-drop: drops the MuJoCo hopper from a given flight state with a constant input and writes
 //   DIR/trajectory.csv  one row per step: t, mode, the 14 flight coordinates, foot, normal force,
 //                       tau_hip, F_leg
-//   DIR/events.csv      one row per touchdown/takeoff: type, time, foot, normal force, the flight
-//                       state (before touchdown / after takeoff) and the stance state (after
-//                       touchdown / before takeoff)
+//   DIR/events.csv      one row per touchdown/takeoff (ContactPhaseDetector): type, time, foot,
+//                       the flight state (before touchdown / after takeoff) and the stance state
+//                       (after touchdown / before takeoff)
 // Example:
 //   ddoc-drop --model models/hopper.xml --state "0,1,0.1,0,0.7,60,2000,0.5,0,0,0,0,0,0"
 //             --u "0,0,60,2000" --duration 2 --out out/drop
@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
     traj << "t,mode";
     for (const char* n : kFlightNames) traj << "," << n;
     traj << ",foot_x,foot_y,normal_force,tau_hip,f_leg\n";
-    events << "type,time,foot_x,foot_y,normal_force";
+    events << "type,time,foot_x,foot_y";
     for (const char* n : kFlightNames) events << ",flight_" << n;
     for (const char* n : kStanceNames) events << ",stance_" << n;
     events << "\n";
@@ -152,7 +152,7 @@ int main(int argc, char** argv) {
     }
     for (const ddoc::ContactEvent& e : sim.events()) {
       events << (e.type == ddoc::ContactEvent::Type::kTouchdown ? "touchdown" : "takeoff") << ","
-             << e.time << "," << e.foot(0) << "," << e.foot(1) << "," << e.normal_force;
+             << e.time << "," << e.foot(0) << "," << e.foot(1);
       for (int i = 0; i < 14; ++i) events << "," << e.flight(i);
       for (int i = 0; i < 10; ++i) events << "," << e.stance(i);
       events << "\n";
