@@ -22,6 +22,7 @@
 
 #include "ddoc/hopper/nominal_gait.h"
 #include "ddoc/mujoco/hopper_sim.h"
+#include "scenario.h"
 
 namespace {
 
@@ -68,7 +69,8 @@ const char* kStanceNames[10] = {"theta",  "phi",  "r",  "k_hip",  "k_leg",
 int main(int argc, char** argv) {
   CLI::App app{"Drop the MJCF hopper from a state with constant inputs; write trajectory.csv and "
                "events.csv"};
-  std::string model, state, input, out, pushes_text;
+  std::string model, state, input, out;
+  std::vector<std::string> pushes;
   double duration = 2.0, nominal = 0.0;
   bool use_nominal = false;
   app.add_option("--model", model, "MJCF hopper file (models/hopper.xml, ...)")->required();
@@ -80,7 +82,7 @@ int main(int argc, char** argv) {
                              "start from the analytic nominal gait with this forward speed (m/s); "
                              "--state/--u override it");
   app.add_option("--duration", duration, "simulated time, s")->check(CLI::PositiveNumber);
-  app.add_option("--push", pushes_text, "pushes 'force_x,start,duration[;...]' (N, s, s)");
+  app.add_option("--push", pushes, "a push TIME,FORCE,DURATION (s, N, s); repeatable");
   app.add_option("--out", out, "output directory")->required();
   CLI11_PARSE(app, argc, argv);
   use_nominal = nom->count() > 0;
@@ -109,14 +111,7 @@ int main(int argc, char** argv) {
       const std::vector<double> v = ParseList(input, 4, "--u");
       for (int i = 0; i < 4; ++i) u(i) = v[i];
     }
-    if (!pushes_text.empty()) {
-      std::stringstream ss(pushes_text);
-      std::string one;
-      while (std::getline(ss, one, ';')) {
-        const std::vector<double> v = ParseList(one, 3, "--push");
-        sim.AddPush(ddoc::Push{v[0], v[1], v[2]});
-      }
-    }
+    for (const std::string& p : pushes) sim.AddPush(ddoc::app::ParsePush(p));
     const Eigen::Vector4d lo = ddoc::hopper::InputLowerBound(), hi = ddoc::hopper::InputUpperBound();
     if ((u.array() < lo.array()).any() || (u.array() > hi.array()).any()) {
       std::fprintf(stderr, "warning: --u outside the paper's bounds [-4,4]x[-4,4]x[10,150]x"

@@ -60,14 +60,6 @@ HopperParams ModelParams(const Scenario& s) {
   return p;
 }
 
-double PushForce(const Scenario& s, double t) {
-  double f = 0.0;
-  for (const Push& p : s.pushes) {
-    if (t >= p.time && t < p.time + p.duration) f += p.force;
-  }
-  return f;
-}
-
 plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model) {
   plugin::ControllerConfig config;
   config.method = ToPluginMethod(s.method);

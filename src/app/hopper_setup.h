@@ -38,9 +38,6 @@ HopperParams ModelParams(const Scenario& s);
 /// The controller configuration of a scenario: method, model, gait and <learning> overrides.
 plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model);
 
-/// The sum of the scenario's pushes active at time t, N.
-double PushForce(const Scenario& s, double t);
-
 }  // namespace ddoc::app
 
 #endif  // DDOC_APP_HOPPER_SETUP_H_

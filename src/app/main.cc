@@ -212,7 +212,7 @@ int Run(int argc, char** argv) {
 
   while (!done()) {
     const double t = d->time;
-    const double push = PushForce(s, t);
+    const double push = PushForce(s.pushes, t);
     ApplyDragAndPush(map, m, d, push);
     mj_step(m, d);
     ++step;

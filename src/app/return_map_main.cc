@@ -57,7 +57,7 @@ class Stepper {
     const mjModel* m = m_;
     mjData* d = d_;
     for (;;) {
-      ApplyDragAndPush(c_->mapping(), m, d, pushes_ ? PushForce(s_, d->time) : 0.0);
+      ApplyDragAndPush(c_->mapping(), m, d, pushes_ ? PushForce(s_.pushes, d->time) : 0.0);
       mj_step(m, d);
       if (c_->failed()) return c_->error();
       const State x = FlightState(c_->mapping(), d, c_->vsa());

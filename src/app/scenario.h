@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "ddoc/hopper/push.h"
+
 namespace ddoc::app {
 
 /// A bad scenario file or flag. The message names the file, the line and the element.
@@ -24,13 +26,6 @@ enum class Method { kAlg1, kOcfb, kMrl };
 /// "alg1" | "ocfb" | "mrl"; throws ScenarioError naming the bad value.
 Method ParseMethod(const std::string& name);
 const char* MethodName(Method method);
-
-/// A horizontal push on the body's COM: force [N] during [time, time + duration) [s].
-struct Push {
-  double time = 0.0;      // start, simulated seconds
-  double force = 0.0;     // horizontal force [N], + is forward (+x)
-  double duration = 0.1;  // [s], > 0
-};
 
 /// Model parameters given as numbers (Table I); unset fields keep the defaults of
 /// the analytic hopper. Used when the scenario has no model MJCF.
@@ -95,7 +90,7 @@ Scenario LoadScenario(const std::string& path);
 /// Checks ranges and files (robot/model MJCF exist, hops/seconds, pushes). Throws ScenarioError.
 void ValidateScenario(const Scenario& scenario);
 
-/// Parses "time,force,duration" (a --push flag). Throws ScenarioError.
+/// Parses "TIME,FORCE,DURATION" (the --push format of every executable). Throws ScenarioError.
 Push ParsePush(const std::string& text);
 
 }  // namespace ddoc::app

@@ -86,14 +86,6 @@ void HopperSim::SetStanceState(const Eigen::Matrix<double, 10, 1>& x, double foo
   stance_now_ = stance_before_ = Stance();
 }
 
-double HopperSim::PushForce(double t) const {
-  double f = 0.0;
-  for (const Push& p : pushes_) {
-    if (t >= p.start && t < p.start + p.duration) f += p.force_x;
-  }
-  return f;
-}
-
 bool HopperSim::Step(const Eigen::Vector4d& u) {
   if (!u.allFinite()) throw InvalidArgument("HopperSim::Step: u is not finite");
   const mjModel* m = model_.get();

@@ -68,8 +68,8 @@ TEST(HopperSimTest, PushChangesMomentumByItsImpulse) {
   V14 x0 = V14::Zero();
   x0 << 0, 20.0, 0, 0, 0.7, 50, 2000, 0, 0, 0, 0, 0, 0, 0;
   sim.SetFlightState(x0);
-  sim.AddPush(Push{-20.0, 0.1, 0.1});
-  sim.AddPush(Push{25.0, 0.3, 0.05});
+  sim.AddPush(Push{0.1, -20.0, 0.1});
+  sim.AddPush(Push{0.3, 25.0, 0.05});
   const Eigen::Vector4d u(0, 0, 50, 2000);
   while (sim.time() < 0.5 - 1e-9) sim.Step(u);
   const double expected = (-20.0 * 0.1 + 25.0 * 0.05) / p.M;

@@ -14,6 +14,7 @@
 #include <mujoco/mujoco.h>
 
 #include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/push.h"
 #include "ddoc/hopper/vsa.h"
 #include "ddoc/mujoco/contact_phase.h"
 #include "ddoc/mujoco/hopper_mapping.h"
@@ -58,13 +59,6 @@ struct ContactEvent {
   Eigen::Vector2d foot = Eigen::Vector2d::Zero();  ///< foot centre at `time`, m
 };
 
-/// A horizontal push on the COM (Section V-D disturbance rejection).
-struct Push {
-  double force_x = 0.0;   ///< N (F_b = -20, F_f = 25 in the paper)
-  double start = 0.0;     ///< s, simulation time
-  double duration = 0.0;  ///< s
-};
-
 /// Settings of HopperSim.
 struct HopperSimSettings {
   ContactPhaseSettings contact;  ///< the contact-phase detector; default ContactPhaseSettings{}
@@ -102,8 +96,8 @@ class HopperSim {
 
   void AddPush(const Push& push) { pushes_.push_back(push); }
   void ClearPushes() { pushes_.clear(); }
-  /// Sum of active push forces at time t.
-  double PushForce(double t) const;
+  /// Sum of active push forces at time t, N (ddoc::PushForce).
+  double PushForce(double t) const { return ddoc::PushForce(pushes_, t); }
 
   const std::vector<ContactEvent>& events() const { return events_; }
   void ClearEvents() { events_.clear(); }
