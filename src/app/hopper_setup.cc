@@ -7,18 +7,6 @@
 #include "ddoc/mujoco/hopper_sim.h"
 
 namespace ddoc::app {
-namespace {
-
-plugin::Method ToPluginMethod(Method m) {
-  switch (m) {
-    case Method::kAlg1: return plugin::Method::kAlg1;
-    case Method::kOcfb: return plugin::Method::kOcfb;
-    case Method::kMrl: return plugin::Method::kMrl;
-  }
-  return plugin::Method::kAlg1;
-}
-
-}  // namespace
 
 std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
                        double phase_time) {
@@ -62,48 +50,38 @@ HopperParams ModelParams(const Scenario& s) {
 
 plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model) {
   plugin::ControllerConfig config;
-  config.method = ToPluginMethod(s.method);
+  config.driver.method = s.method;
   config.model = model;
   config.gait.forward_speed = s.forward_speed;
   if (s.gait_k0_hip) config.gait.k0_hip = *s.gait_k0_hip;
   if (s.gait_k0_leg) config.gait.k0_leg = *s.gait_k0_leg;
   const LearningOverrides& l = s.learning;
-  if (l.c) config.learner.c = *l.c;
-  if (l.gamma) config.learner.gamma = *l.gamma;
-  if (l.epsilon) config.learner.epsilon = *l.epsilon;
-  if (l.delta_i) config.learner.delta_i = *l.delta_i;
-  if (l.initial_hops) config.initial_hops = *l.initial_hops;
-  if (l.alpha_min) config.learner.alpha_min = *l.alpha_min;
-  if (l.max_duration_step) config.learner.switching.max_duration_step = *l.max_duration_step;
-  if (l.alpha_scales_feedback) config.learner.controller.alpha_scales_feedback = *l.alpha_scales_feedback;
-  if (l.regularization) {
-    config.learner.controller.regularization = *l.regularization;
-    config.model_learner.controller.regularization = *l.regularization;
-  }
-  if (l.per_input_regularization) {
-    const RegularizationScaling scaling = *l.per_input_regularization
-                                              ? RegularizationScaling::kPerInput
-                                              : RegularizationScaling::kScalar;
-    for (LearnerSettings* ls : {&config.learner, &config.model_learner}) {
-      ls->controller.regularization_scaling = scaling;
-      ls->backward.regularization_scaling = scaling;
+  LearnerSettings& learner = config.driver.learner;
+  if (l.c) learner.c = *l.c;
+  if (l.gamma) learner.gamma = *l.gamma;
+  if (l.epsilon) learner.epsilon = *l.epsilon;
+  if (l.delta_i) learner.delta_i = *l.delta_i;
+  if (l.initial_hops) config.driver.warmup_trials = *l.initial_hops;
+  if (l.alpha_min) learner.alpha_min = *l.alpha_min;
+  if (l.max_duration_step) learner.switching.max_duration_step = *l.max_duration_step;
+  if (l.alpha_scales_feedback) learner.controller.alpha_scales_feedback = *l.alpha_scales_feedback;
+  if (l.reset_alpha_on_accept) learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
+  if (l.alpha_initial) learner.alpha_initial = *l.alpha_initial;
+  // The regularization mu, the cyclic value and the terminal condition apply to both learners
+  // (the model solve of u^0 and the robot's); mu is the same in the online QP (33) and the
+  // Riccati pass.
+  for (LearnerSettings* ls : {&learner, &config.model_learner}) {
+    if (l.regularization) {
+      ls->controller.regularization = *l.regularization;
+      ls->backward.riccati_regularization = *l.regularization;
     }
-  }
-  if (l.reset_alpha_on_accept) config.learner.reset_alpha_on_accept = *l.reset_alpha_on_accept;
-  if (l.alpha_initial) config.learner.alpha_initial = *l.alpha_initial;
-  if (l.cyclic_value) {
-    config.learner.backward.cyclic_value = *l.cyclic_value;
-    config.model_learner.backward.cyclic_value = *l.cyclic_value;
-  }
-  if (l.terminal_event) {
-    config.learner.backward.terminal_event = *l.terminal_event;
-    config.model_learner.backward.terminal_event = *l.terminal_event;
+    if (l.cyclic_value) ls->backward.cyclic_value = *l.cyclic_value;
+    if (l.terminal_event) ls->backward.terminal_event = *l.terminal_event;
   }
   if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
-  if (l.flight_pitch_feedback) config.flight_pitch_feedback = *l.flight_pitch_feedback;
-  if (l.flight_pitch_feedback_from_hop) {
-    config.flight_pitch_feedback_from_hop = *l.flight_pitch_feedback_from_hop;
-  }
+  const ExperimentOverrides& x = s.experiment;
+  if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
+  if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;
   return config;
 }
 

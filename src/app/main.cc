@@ -216,6 +216,7 @@ int Run(int argc, char** argv) {
     ApplyDragAndPush(map, m, d, push);
     mj_step(m, d);
     ++step;
+    if (controller->offline_pending()) controller->RunOffline();  // outside mjcb_control
 
     if (controller->failed()) {
       std::fprintf(stderr, "\nddoc-hopper: %s\n", controller->error().c_str());

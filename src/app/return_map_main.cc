@@ -59,6 +59,7 @@ class Stepper {
     for (;;) {
       ApplyDragAndPush(c_->mapping(), m, d, pushes_ ? PushForce(s_.pushes, d->time) : 0.0);
       mj_step(m, d);
+      if (c_->offline_pending()) c_->RunOffline();  // outside mjcb_control
       if (c_->failed()) return c_->error();
       const State x = FlightState(c_->mapping(), d, c_->vsa());
       if (c_->mode() != mode_) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "ddoc/hopper/push.h"
+#include "ddoc/trial_driver.h"
 
 namespace ddoc::app {
 
@@ -20,10 +21,7 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// The three methods of Section V, all run by the same engine (see README).
-enum class Method { kAlg1, kOcfb, kMrl };
-
-/// "alg1" | "ocfb" | "mrl"; throws ScenarioError naming the bad value.
+/// "alg1" | "ocfb" | "mrl" (ddoc::Method); throws ScenarioError naming the bad value.
 Method ParseMethod(const std::string& name);
 const char* MethodName(Method method);
 
@@ -45,14 +43,11 @@ struct LearningOverrides {
   std::optional<double> gamma;              // backtracking factor
   std::optional<double> epsilon;            // convergence threshold on int|du|^2 + |dT|^2
   std::optional<int> delta_i;               // convergence window (accepted iterations)
-  std::optional<int> initial_hops;          // HopperControllerConfig::initial_hops, >= 1
+  std::optional<int> initial_hops;          // TrialDriverSettings::warmup_trials, >= 1
   std::optional<double> alpha_min;          // line search gives up below this alpha
   std::optional<double> max_duration_step;  // cap on |dD_k| of (31), s
   std::optional<double> regularization;     // mu of (33): L_uu + mu (1 + max|diag L_uu|) I
   std::optional<bool> alpha_scales_feedback;  // alpha_scales="all" (paper) | "feedforward"
-  // regularization_scaling="scalar" (one mu for all inputs) | "per_input" (mu_i in normalized
-  // input units, RegularizationScaling::kPerInput); both learners, controller and Riccati pass
-  std::optional<bool> per_input_regularization;
   std::optional<bool> reset_alpha_on_accept;  // alpha_after_accept="reset" (paper) | "grow"
   std::optional<double> alpha_initial;      // alpha_0 of the line search, in (0, 1]
   std::optional<double> cyclic_value;       // BackwardPassSettings::cyclic_value, in [0, 1]
@@ -60,9 +55,12 @@ struct LearningOverrides {
   // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
   // model gait's takeoff state: ControllerConfig::anchor_reference)
   std::optional<bool> anchor_reference;
-  // ControllerConfig::flight_pitch_feedback (in [0, 1]) and flight_pitch_feedback_from_hop (>= 1)
-  std::optional<double> flight_pitch_feedback;
-  std::optional<int> flight_pitch_feedback_from_hop;
+};
+
+/// <experiment .../>: settings that are NOT the paper and not defaults (docs/experiments.md).
+struct ExperimentOverrides {
+  std::optional<double> flight_pitch_feedback;  // PitchFeedbackExperiment::scale, in [0, 1]
+  std::optional<int> from_hop;                  // PitchFeedbackExperiment::from_hop, >= 1
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory
@@ -73,7 +71,7 @@ struct Scenario {
   std::string robot_mjcf;            // the true robot (required)
   std::string model_mjcf;            // the model as an MJCF ("" = use model_numbers)
   ModelNumbers model_numbers;        // the model as numbers
-  Method method = Method::kAlg1;     // alg1 | ocfb | mrl
+  Method method = Method::kAlg1;     // alg1 | ocfb | mrl (ddoc::Method)
   int hops = 100;                    // stop after this many hops (0 = use seconds)
   double seconds = 0.0;              // stop after this simulated time (0 = use hops)
   std::vector<Push> pushes;          // in time order
@@ -82,6 +80,7 @@ struct Scenario {
   // 2000 N/m). They must lie in the input bounds [10, 150] and [1780, 2350].
   std::optional<double> gait_k0_hip, gait_k0_leg;
   LearningOverrides learning;        // <learning .../>
+  ExperimentOverrides experiment;    // <experiment .../>
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.

@@ -73,19 +73,30 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   EXPECT_NE(error.find("mjModel is null"), std::string::npos) << error;
 
   ControllerConfig reversed;
-  reversed.flight_min = 2.0;  // > flight_max = 1.5
+  reversed.durations.flight_min = 2.0;  // > flight_max = 1.5
   EXPECT_EQ(HopperController::Create(model.get(), reversed, &error), nullptr);
   EXPECT_NE(error.find("duration"), std::string::npos) << error;
 
   ControllerConfig bad_pitch;
-  bad_pitch.flight_pitch_feedback = 1.5;
+  bad_pitch.pitch_experiment.scale = 1.5;
   EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("flight_pitch_feedback must be in [0, 1], got 1.5"), std::string::npos)
+  EXPECT_NE(error.find("pitch_experiment.scale = 1.5, expected in [0, 1]"), std::string::npos)
       << error;
-  bad_pitch.flight_pitch_feedback = 0.5;
-  bad_pitch.flight_pitch_feedback_from_hop = -1;
+  bad_pitch.pitch_experiment.scale = 0.5;
+  bad_pitch.pitch_experiment.from_hop = -1;
   EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("flight_pitch_feedback_from_hop must be >= 0"), std::string::npos) << error;
+  EXPECT_NE(error.find("pitch_experiment.from_hop = -1, expected >= 0"), std::string::npos)
+      << error;
+
+  ControllerConfig bad_latency;
+  bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
+  EXPECT_EQ(HopperController::Create(model.get(), bad_latency, &error), nullptr);
+  EXPECT_NE(error.find("offline_latency = 0.06"), std::string::npos) << error;
+
+  ControllerConfig bad_warmup;
+  bad_warmup.driver.warmup_trials = 0;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_warmup, &error), nullptr);
+  EXPECT_NE(error.find("warmup_trials = 0"), std::string::npos) << error;
 
   ControllerConfig bad_model;
   bad_model.model.M = -1.0;
@@ -109,7 +120,7 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
 
 TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
   ControllerConfig config;
-  config.initial_hops = 1;  // the first hop initializes the learner (checked at the end)
+  config.driver.warmup_trials = 1;  // the first hop initializes the learner (checked at the end)
   Rig rig("hopper.xml", config);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
@@ -265,33 +276,10 @@ TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
   EXPECT_EQ(rig.c().hop(), 3);
 }
 
-TEST(HopperControllerTest, PhaseTimeKeepsInputsInBoundsAndHops) {
-  // The phase-based time mapping (config.phase_time) changes only the controller's tau: the
-  // robot keeps hopping for a few hops, inputs stay in the bounds, and the recorded hop times
-  // are the measured ones (T2 of a report equals its takeoff minus its start).
-  ControllerConfig config;
-  config.phase_time = true;
-  Rig rig("hopper_m12.xml", config);
-  ASSERT_TRUE(rig.ok());
-  std::vector<HopReport> reports;
-  while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
-    rig.Step();
-    ExpectInputInBounds(rig.c());
-    for (const HopReport& r : rig.c().TakeReports()) reports.push_back(r);
-    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
-  }
-  ASSERT_EQ(reports.size(), 3u);
-  for (const HopReport& r : reports) {
-    EXPECT_NEAR(r.t2, r.t_end - r.t_start, 1e-9);
-    EXPECT_GT(r.t1, 0.1);
-    EXPECT_GT(r.apex, 0.7);
-  }
-}
-
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the exact model for a few hops: the learner must accept at least one trial,
   // and the nominal cost it keeps must drop below the cost of the initial hop (u^0, T^0), i.e.
-  // the last warm-up hop (config.initial_hops) that initializes the learner.
+  // the last warm-up hop (config.driver.warmup_trials) that initializes the learner.
   Rig rig("hopper.xml");
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
@@ -299,7 +287,7 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   while (rig.c().hop() < 8 && rig.d()->time < 8.0) {
     rig.Step();
     for (const HopReport& r : rig.c().TakeReports()) {
-      if (r.hop + 1 == rig.c().config().initial_hops) initial = rig.c().learner()->nominal_cost();
+      if (r.hop + 1 == rig.c().config().driver.warmup_trials) initial = rig.c().learner()->nominal_cost();
       reports.push_back(r);
     }
     ASSERT_FALSE(rig.c().failed()) << rig.c().error();
@@ -316,9 +304,10 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   // trial terminates the line search with no accepted iteration. From then on the robot must run
   // u^0, the OC-FB law, not a replay of the measured nominal's inputs.
   ControllerConfig config;
-  config.learner.c = 1e12;
-  config.learner.alpha_min = 0.6 * config.learner.alpha_initial;  // gamma 0.5: one rejection
-  config.initial_hops = 2;
+  config.driver.learner.c = 1e12;
+  // gamma 0.5: one rejection
+  config.driver.learner.alpha_min = 0.6 * config.driver.learner.alpha_initial;
+  config.driver.warmup_trials = 2;
   Rig rig("hopper_m12.xml", config);
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
