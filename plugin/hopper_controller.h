@@ -62,7 +62,7 @@ struct ControllerConfig {
   /// [0, durations.flight_min). Meanwhile the robot runs u^0. 0 = learn inside Compute at the
   /// takeoff step (synchronous, for comparison only). Default: covers the offline part's
   /// measured computation (docs/benchmarks.md).
-  double offline_latency = 0.0;
+  double offline_latency = 0.02;
   /// Run the offline part on a worker thread of the controller (as on a robot) instead of in
   /// RunOffline() called by the host between steps. Compute never waits for it.
   bool offline_thread = false;

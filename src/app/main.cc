@@ -45,7 +45,7 @@ int Run(int argc, char** argv) {
       "Exit codes: 0 success, 1 internal error, 2 bad input, 3 the robot fell."};
   std::string scenario_path, out_dir, method, robot, model_mjcf, render_dir, video;
   int hops = -1, width = 640, height = 480, log_every = 1;
-  double seconds = -1, fps = 60;
+  double seconds = -1, fps = 60, latency = -1;
   std::vector<std::string> pushes;
   bool no_pushes = false, quiet = false;
   cli.add_option("scenario", scenario_path, "scenario XML file (see models/scenarios/)")
@@ -66,6 +66,9 @@ int Run(int argc, char** argv) {
   cli.add_option("--fps", fps, "frames per second of simulated time (default 60)");
   cli.add_option("--video", video, "assemble the frames into this MP4 with ffmpeg");
   cli.add_flag("--quiet,-q", quiet, "no progress display");
+  CLI::Option* latency_opt = cli.add_option(
+      "--offline-latency", latency,
+      "simulated s from a hop's end until the law learned from it takes effect (0: synchronous)");
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -132,7 +135,8 @@ int Run(int argc, char** argv) {
   mjModel* m = model.get();
   mjData* d = data.get();
 
-  const plugin::ControllerConfig config = ControllerConfigFor(s, params);
+  plugin::ControllerConfig config = ControllerConfigFor(s, params);
+  if (*latency_opt) config.offline_latency = latency;
   std::string error;
   const auto t_wall0 = std::chrono::steady_clock::now();
   std::unique_ptr<plugin::HopperController> controller =

@@ -39,10 +39,12 @@ class Rig {
   }
   ~Rig() { Detach(); }
 
-  // One physics step with the robot's drag; returns the foot-floor normal force after it.
+  // One physics step with the robot's drag, then the offline part if a hop ended (as the host
+  // loop of ddoc-hopper does); returns the foot-floor normal force after the step.
   double Step() {
     ApplyDragAndPush(controller_->mapping(), model_.get(), data_.get(), 0.0);
     mj_step(model_.get(), data_.get());
+    if (controller_->offline_pending()) controller_->RunOffline();
     return FootNormalForce(controller_->mapping(), model_.get(), data_.get());
   }
 
