@@ -199,7 +199,7 @@ TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
   fs::remove_all(dir);
   {
     RunLog log(dir.string(), "alg1");
-    HopRecord h;
+    plugin::HopReport h;
     h.hop = 3;
     h.cost = 1.5;
     h.accepted = true;
