@@ -1,6 +1,6 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
-// The output files of one ddoc-hopper run (formats in README "Output files").
+// The output files of one ddoc-hopper run (formats in docs/hopper.md, "Output files").
 // Every file is flushed as it grows, and summary.json is rewritten after every hop,
 // so a run that falls keeps everything up to the fall.
 #ifndef DDOC_APP_RUN_LOG_H_

@@ -99,7 +99,7 @@ TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
     EXPECT_EQ(result.status, LearnerStatus::kConverged);
   } else {
     // The paper's variant with the du^{i-1} term in (30) reaches the same point but ends with
-    // a failed line search more often than the exact adjoint (README, design notes).
+    // a failed line search more often than the exact adjoint (docs/engine.md, "Design decisions").
     EXPECT_NE(result.status, LearnerStatus::kMaxTrials);
   }
   EXPECT_NEAR(result.T(0), coarse.D0, 0.02);
@@ -398,7 +398,7 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
 INSTANTIATE_TEST_SUITE_P(BackwardVariants, TwoModeLqTest, ::testing::Values(0, 1, 2));
 
 // The full Riccati extension (Newton-type step) decreases the cost monotonically and fast at
-// first, but on this problem its line search stalls before the optimum (README: known gaps).
+// first, but on this problem its line search stalls before the optimum (docs/engine.md, "Known gaps").
 TEST(Learner, FullRiccatiVariantDecreasesTheCost) {
   TwoModeLq lq;
   LqProblem p(lq);

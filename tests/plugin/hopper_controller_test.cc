@@ -219,7 +219,7 @@ TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
 TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
   // A measured fact of MuJoCo 2.2.2 that shapes the plugin: mjd_transitionFD steps the model
   // and does not restore d->time, so a callback cannot tell its calls from real steps by time.
-  // Hence HoldScope. If this test fails, MuJoCo changed and the README note can go.
+  // Hence HoldScope. If this test fails, MuJoCo changed and the note in plugin/README.md can go.
   MjModelPtr model = LoadMjcf(ModelPath("hopper.xml"));
   MjDataPtr data(mj_makeData(model.get()));
   data->qpos[1] = 0.9;
