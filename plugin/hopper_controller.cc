@@ -130,6 +130,8 @@ void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double*
 
 void HopperController::Reset(const mjModel* m, mjData* d) {
   FinishOffline();
+  robot_model_ = m;
+  robot_data_ = d;
   driver_->Reset();
   waiting_.clear();
   reports_.clear();
@@ -187,6 +189,7 @@ void HopperController::WriteHeld(const mjModel* m, mjData* d) {
 }
 
 void HopperController::Compute(const mjModel* m, mjData* d) {
+  if (m != robot_model_ || d != robot_data_) return;  // another model's pass, not our robot
   if (in_compute_) {  // nested call (e.g. a finite-difference mj_forward inside a step)
     WriteHeld(m, d);
     return;

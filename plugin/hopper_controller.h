@@ -91,7 +91,8 @@ class HopperController {
   /// the VSA, steps the current law, writes ctrl; at a takeoff hands the measured hop to the
   /// offline part. Never blocks, never throws, never writes a non-finite or out-of-bounds input.
   /// A call at the same simulated time as the previous one, a nested call or a call while held
-  /// only rewrites the held input.
+  /// only rewrites the held input. A call with another (m, d) than the last Reset's (MuJoCo's
+  /// callback is global: compiling or forwarding another model calls it too) does nothing.
   void Compute(const mjModel* m, mjData* d);
 
   /// True when a measured hop waits for RunOffline (host mode, offline_thread = false).
@@ -184,6 +185,8 @@ class HopperController {
   std::vector<Vector> pitch_scale_;  // PitchFeedbackExperiment: per mode, empty when off
 
   // Per-step state (Compute).
+  const mjModel* robot_model_ = nullptr;  // the (m, d) of the last Reset: Compute's only target
+  const mjData* robot_data_ = nullptr;
   ContactPhaseDetector detector_;
   Vsa vsa_;
   OnlineController* law_ = nullptr;              // the law that runs now

@@ -8,6 +8,18 @@
 
 namespace ddoc::app {
 
+int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const RunError& e) {
+    std::fprintf(stderr, "%s: %s\n", tool, e.what());
+    return e.code();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: internal error: %s\n", tool, e.what());
+    return kExitError;
+  }
+}
+
 std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
                        double phase_time) {
   char buf[160];

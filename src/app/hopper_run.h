@@ -39,6 +39,11 @@ class RunError : public std::runtime_error {
   int code_;
 };
 
+/// The body of the tools' main(): runs `run`; a RunError escaping it is printed as
+/// "<tool>: <message>" and ends with its code, any other exception as "<tool>: internal error:
+/// <message>" with kExitError.
+int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv);
+
 /// Fall limits: the run ends with exit code 3 when one holds.
 struct FallLimits {
   double min_height = 0.3;     ///< COM height y below this, m (the leg is 0.7 m long)

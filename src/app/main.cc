@@ -296,33 +296,23 @@ int Run(int argc, char** argv) {
   Options o;
   const int parsed = ParseOptions(argc, argv, &o);
   if (parsed >= 0) return parsed;
+  LoadedRun run = LoadRun(o.scenario, o.run);  // RunError: RunTool prints it
+  if (o.out.empty()) o.out = "out/" + run.scenario.name;
+  if (!o.video.empty() && o.render_dir.empty()) o.render_dir = o.out + "/frames";
+  Frames frames(o, run.model.get(), MethodName(run.scenario.method));
+  std::unique_ptr<RunLog> log;
   try {
-    LoadedRun run = LoadRun(o.scenario, o.run);
-    if (o.out.empty()) o.out = "out/" + run.scenario.name;
-    if (!o.video.empty() && o.render_dir.empty()) o.render_dir = o.out + "/frames";
-    Frames frames(o, run.model.get(), MethodName(run.scenario.method));
-    std::unique_ptr<RunLog> log;
-    try {
-      log = std::make_unique<RunLog>(o.out, MethodName(run.scenario.method));
-    } catch (const std::exception& e) {
-      throw RunError(kExitBadInput, e.what());
-    }
-    HopperRun hopper(o, &run, log.get(), &frames);
-    return hopper.Finish(hopper.Loop());
-  } catch (const RunError& e) {
-    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
-    return e.code();
+    log = std::make_unique<RunLog>(o.out, MethodName(run.scenario.method));
+  } catch (const std::exception& e) {
+    throw RunError(kExitBadInput, e.what());
   }
+  HopperRun hopper(o, &run, log.get(), &frames);
+  return hopper.Finish(hopper.Loop());
 }
 
 }  // namespace
 }  // namespace ddoc::app
 
 int main(int argc, char** argv) {
-  try {
-    return ddoc::app::Run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ddoc-hopper: internal error: %s\n", e.what());
-    return 1;
-  }
+  return ddoc::app::RunTool("ddoc-hopper", ddoc::app::Run, argc, argv);
 }

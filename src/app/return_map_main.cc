@@ -327,32 +327,22 @@ int Run(int argc, char** argv) {
   Options o;
   const int parsed = ParseOptions(argc, argv, &o);
   if (parsed >= 0) return parsed;
-  try {
-    LoadedRun run = LoadRun(o.scenario, o.run);
-    if (o.out.empty()) o.out = "out/" + run.scenario.name + "_return_map";
-    std::error_code ec;
-    std::filesystem::create_directories(o.out, ec);
-    ReturnMap map(o, &run);
-    map.LearnFreezeAndSettle();
-    map.PerturbedRuns();
-    const ReturnMapFit fit = map.Fit();
-    map.WriteJson(fit);
-    map.Print(fit);
-    return kExitOk;
-  } catch (const RunError& e) {
-    std::fprintf(stderr, "ddoc-return-map: %s\n", e.what());
-    return e.code();
-  }
+  LoadedRun run = LoadRun(o.scenario, o.run);  // RunError: RunTool prints it
+  if (o.out.empty()) o.out = "out/" + run.scenario.name + "_return_map";
+  std::error_code ec;
+  std::filesystem::create_directories(o.out, ec);
+  ReturnMap map(o, &run);
+  map.LearnFreezeAndSettle();
+  map.PerturbedRuns();
+  const ReturnMapFit fit = map.Fit();
+  map.WriteJson(fit);
+  map.Print(fit);
+  return kExitOk;
 }
 
 }  // namespace
 }  // namespace ddoc::app
 
 int main(int argc, char** argv) {
-  try {
-    return ddoc::app::Run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "ddoc-return-map: internal error: %s\n", e.what());
-    return 1;
-  }
+  return ddoc::app::RunTool("ddoc-return-map", ddoc::app::Run, argc, argv);
 }

@@ -58,14 +58,6 @@ Optimum DenseSearch(const TwoModeLq& lq, double d0_lo, double d0_hi, double d1_l
   return best;
 }
 
-LearnerSettings TestSettings() {
-  LearnerSettings s;
-  s.epsilon = 1e-7;
-  s.max_trials = 1500;
-  s.max_samples = 10000;
-  return s;
-}
-
 // 0: the paper's (30) with the exact adjoint (default); 1: (30) with the du^{i-1} term;
 // 2: the Riccati-feedback extension (P from the Riccati equation, p the gradient adjoint).
 class TwoModeLqTest : public ::testing::TestWithParam<int> {};
@@ -84,7 +76,7 @@ TEST_P(TwoModeLqTest, ReachesTheIndependentOptimum) {
   ps.dt = 1e-3;
   ModelPlant plant(p.problem, ps);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.backward.use_previous_du = GetParam() == 1;
   if (GetParam() == 2) {
     settings.backward.equation = BackwardEquation::kRiccatiFeedback;
@@ -125,17 +117,17 @@ MethodCosts RunThreeMethods(LqProblem& model, LqProblem& truth) {
   MethodCosts out;
   // Costs are always evaluated with the same cost functional (the model's; costs are exact).
   {
-    Learner alg1(model.problem, TestSettings());
+    Learner alg1(model.problem, LqTestSettings());
     out.r_alg1 = alg1.Solve(real_plant, real_plant, x0, initial);
     out.alg1 = out.r_alg1.cost;
   }
   {
-    Learner mrl(model.problem, TestSettings());
+    Learner mrl(model.problem, LqTestSettings());
     out.r_mrl = mrl.Solve(model_plant, real_plant, x0, initial);
     out.mrl = out.r_mrl.cost;
   }
   {
-    Learner ocfb(model.problem, TestSettings());
+    Learner ocfb(model.problem, LqTestSettings());
     out.r_ocfb = ocfb.Solve(model_plant, model_plant, x0, initial);
     Trajectory applied;
     real_plant.Run(x0, ocfb.ConvergedPolicy(), &applied);
@@ -175,7 +167,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
   settings.gamma = 0.5;
   settings.alpha_min = 0.1;
@@ -207,12 +199,12 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   plant.Run(lq.x0, replay, &measured);
   EXPECT_NEAR(EvaluateCost(p.problem, measured).total, cost0, 1e-9 * cost0);
   // An aborted trial (robot fell) also counts as rejected.
-  Learner other(p.problem, TestSettings());
+  Learner other(p.problem, LqTestSettings());
   other.Initialize(measured);
   other.NextTrial();
   const TrialResult aborted = other.AbortTrial();
   EXPECT_FALSE(aborted.accepted);
-  EXPECT_DOUBLE_EQ(other.alpha(), TestSettings().gamma);
+  EXPECT_DOUBLE_EQ(other.alpha(), LqTestSettings().gamma);
 }
 
 TEST(Learner, InitialStateCorrectionPredictsTheNominalCostFromAnotherStart) {
@@ -228,7 +220,7 @@ TEST(Learner, InitialStateCorrectionPredictsTheNominalCostFromAnotherStart) {
   plant.Run(lq.x0, initial, &nominal);
   const Eigen::Vector2d x1 = lq.x0 + Eigen::Vector2d(0.2, -0.3);
   for (bool correct : {false, true}) {
-    LearnerSettings settings = TestSettings();
+    LearnerSettings settings = LqTestSettings();
     settings.alpha_initial = 1e-12;
     settings.alpha_min = 1e-13;
     settings.controller.alpha_scales_feedback = true;
@@ -266,7 +258,7 @@ TEST(Learner, NonmonotoneMemoryComparesWithTheLargestRememberedCost) {
   const double c0 = EvaluateCost(p.problem, run0).total;
   const double rho = EvaluateCost(p.problem, run_origin).total;  // duration terms only
   for (int memory : {1, 2}) {
-    LearnerSettings settings = TestSettings();
+    LearnerSettings settings = LqTestSettings();
     settings.c = 1e-12;
     settings.nonmonotone_memory = memory;
     Learner learner(p.problem, settings);
@@ -292,7 +284,7 @@ TEST(Learner, NonmonotoneMemoryComparesWithTheLargestRememberedCost) {
       EXPECT_DOUBLE_EQ(learner.nominal_cost(), r2.cost);
     }
   }
-  LearnerSettings bad = TestSettings();
+  LearnerSettings bad = LqTestSettings();
   bad.nonmonotone_memory = 0;
   EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
 }
@@ -302,7 +294,7 @@ TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.c = 1e6;  // every trial is rejected
   settings.rebaseline_after = 2;
   Learner learner(p.problem, settings);
@@ -327,7 +319,7 @@ TEST(Learner, RebaselineMakesTheLastRejectedTrialTheNominal) {
     EXPECT_EQ(learner.iteration(), 0);
     EXPECT_DOUBLE_EQ(learner.alpha(), std::pow(settings.gamma, i));  // alpha is kept
   }
-  LearnerSettings bad = TestSettings();
+  LearnerSettings bad = LqTestSettings();
   bad.rebaseline_after = -1;
   EXPECT_THROW(Learner(p.problem, bad), InvalidArgument);
 }
@@ -343,7 +335,7 @@ TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
   FunctionPolicy initial = ZeroInputPolicy();
   Trajectory measured;
   plant.Run(lq.x0, initial, &measured);
-  Learner learner(p.problem, TestSettings()), reference(q.problem, TestSettings());
+  Learner learner(p.problem, LqTestSettings()), reference(q.problem, LqTestSettings());
   learner.Initialize(measured);
   reference.Initialize(measured);
   const double cost = learner.nominal_cost();
@@ -355,7 +347,7 @@ TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
   EXPECT_EQ(learner.nominal_cost(), cost);  // the measured I^i is kept
   learner.NextTrial();
   EXPECT_THROW(learner.RecomputeDirection(), InvalidArgument);  // a trial is pending
-  Learner fresh(p.problem, TestSettings());
+  Learner fresh(p.problem, LqTestSettings());
   EXPECT_THROW(fresh.RecomputeDirection(), InvalidArgument);   // not initialized
 }
 
@@ -364,7 +356,7 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.alpha_min = 0.3;  // two rejections in a row terminate
   Learner learner(p.problem, settings);
   Trajectory measured;
@@ -404,7 +396,7 @@ TEST(Learner, FullRiccatiVariantDecreasesTheCost) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.backward.equation = BackwardEquation::kRiccati;
   settings.backward.riccati_regularization = settings.controller.regularization;
   Learner learner(p.problem, settings);

@@ -5,12 +5,12 @@
 
 #include <gtest/gtest.h>
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include "malloc_counter.h"
 #include "test_systems.h"
+#include "test_util.h"
 
 namespace ddoc {
 namespace testing {
@@ -27,15 +27,6 @@ Trajectory MakeTrajectory(const std::vector<int>& counts) {
     t.modes[k].u = Matrix::Zero(2, counts[k]);
   }
   return t;
-}
-
-void ExpectThrowsWith(const std::function<void()>& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no exception, expected one with \"" << text << "\"";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
 }
 
 TEST(SampleLayout, IndicesAreModeMajor) {

@@ -4,12 +4,26 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "ddoc/switched_system.h"
 
 namespace ddoc {
 namespace testing {
+
+/// Runs f and expects an InvalidArgument whose message contains `text`.
+inline void ExpectThrowsWith(const std::function<void()>& f, const std::string& text) {
+  try {
+    f();
+    ADD_FAILURE() << "no exception, expected one with \"" << text << "\"";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
 
 inline Vector Scalar(double v) {
   Vector out(1);

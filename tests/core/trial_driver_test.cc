@@ -13,24 +13,17 @@
 #include <vector>
 
 #include "ddoc/cost.h"
+#include "test_util.h"
 #include "two_mode_lq.h"
 
 namespace ddoc {
 namespace testing {
 namespace {
 
-LearnerSettings TestSettings() {
-  LearnerSettings s;
-  s.epsilon = 1e-7;
-  s.max_trials = 400;
-  s.max_samples = 10000;
-  return s;
-}
-
 TrialDriverSettings DriverSettings(Method method) {
   TrialDriverSettings s;
   s.method = method;
-  s.learner = TestSettings();
+  s.learner = LqTestSettings();
   return s;
 }
 
@@ -50,14 +43,14 @@ std::vector<double> AcceptedCosts(const std::vector<TrialOutcome>& outcomes) {
   return costs;
 }
 
-void ExpectThrowsWith(const std::function<void()>& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no exception, expected one with \"" << text << "\"";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
+// The exact two-mode LQ problem, its plant and u^0 = 0 as the fallback law.
+class TrialDriverTest : public ::testing::Test {
+ protected:
+  TwoModeLq lq;
+  LqProblem p{lq};
+  ModelPlant plant{p.problem};
+  FunctionPolicy fallback = ZeroInputPolicy();
+};
 
 // Algorithm 1 (real, real) and mRL (model, real) by Learner::Solve and by the episodic driver
 // (warm-up 1, fallback = Solve's initial policy) on an inexact plant: the same trials in the
@@ -73,7 +66,7 @@ TEST_P(TrialDriverVersusSolve, EpisodicRunFollowsSolveTrialForTrial) {
   const bool mrl = GetParam() == Method::kMrl;
 
   FunctionPolicy initial = ConstantInputPolicy();
-  Learner learner(model.problem, TestSettings());
+  Learner learner(model.problem, LqTestSettings());
   const SolveResult solved =
       learner.Solve(mrl ? model_plant : real_plant, real_plant, model_lq.x0, initial);
   ASSERT_GT(solved.iterations, 5);
@@ -103,7 +96,7 @@ TEST(TrialDriver, AllThreeMethodsAgreeWithAnExactModel) {
   ModelPlant model_plant(model.problem);
   ModelPlant real_plant(truth.sys, model.problem.bounds);
   FunctionPolicy initial = ZeroInputPolicy();
-  Learner ocfb(model.problem, TestSettings());
+  Learner ocfb(model.problem, LqTestSettings());
   const SolveResult solved = ocfb.Solve(model_plant, model_plant, lq.x0, initial);
   ASSERT_EQ(solved.status, LearnerStatus::kConverged);
   OnlineController& u0 = ocfb.ConvergedPolicy();
@@ -122,11 +115,7 @@ TEST(TrialDriver, AllThreeMethodsAgreeWithAnExactModel) {
   EXPECT_NEAR(last[1], last[2], 1e-6 * last[2]);
 }
 
-TEST(TrialDriver, OnlineTrialsStartWhereTheLastOneEnded) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
+TEST_F(TrialDriverTest, OnlineTrialsStartWhereTheLastOneEnded) {
   // Identity reset: the next trial starts at the last measured state.
   std::vector<Vector> ends;
   const TrialDriver::NextStart next = [&ends](const Trajectory& t) {
@@ -161,11 +150,7 @@ TEST(TrialDriver, OnlineTrialsStartWhereTheLastOneEnded) {
   for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].cost, b[i].cost) << "trial " << i;
 }
 
-TEST(TrialDriver, WarmupTrialsRunTheFallbackAndTheLastOneInitializes) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
+TEST_F(TrialDriverTest, WarmupTrialsRunTheFallbackAndTheLastOneInitializes) {
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.warmup_trials = 3;
   std::vector<bool> for_learner;
@@ -197,14 +182,10 @@ TEST(TrialDriver, WarmupTrialsRunTheFallbackAndTheLastOneInitializes) {
   EXPECT_EQ(driver.learner()->trials(), 1);
 }
 
-TEST(TrialDriver, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw) {
+TEST_F(TrialDriverTest, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw) {
   // (36) can never hold and alpha_min lies just below alpha_0: the first trial terminates the
   // line search with no accepted iteration, and from then on u^0 runs (not Learner::NextTrial's
   // replay of x^0's inputs).
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.learner.c = 1e12;
   settings.learner.alpha_min = 0.6;
@@ -222,11 +203,7 @@ TEST(TrialDriver, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw) {
   EXPECT_DOUBLE_EQ(o[2].cost, o[0].cost);
 }
 
-TEST(TrialDriver, FreezeKeepsTheCurrentLawAndStopsLearning) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
+TEST_F(TrialDriverTest, FreezeKeepsTheCurrentLawAndStopsLearning) {
   TrialDriver driver(p.problem, DriverSettings(Method::kAlg1), fallback);
   driver.Run(plant, lq.x0, 4);
   Policy* law = &driver.law();
@@ -252,11 +229,7 @@ TEST(TrialDriver, FreezeKeepsTheCurrentLawAndStopsLearning) {
   EXPECT_EQ(driver.trial(), 0);
 }
 
-TEST(TrialDriver, OcfbRunsTheFallbackEveryTrial) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
+TEST_F(TrialDriverTest, OcfbRunsTheFallbackEveryTrial) {
   TrialDriver driver(p.problem, DriverSettings(Method::kOcfb), fallback);
   EXPECT_EQ(driver.learner(), nullptr);
   EXPECT_FALSE(driver.CompletionLearns());
@@ -269,11 +242,7 @@ TEST(TrialDriver, OcfbRunsTheFallbackEveryTrial) {
   EXPECT_EQ(&driver.law(), &fallback);
 }
 
-TEST(TrialDriver, BadSettingsAreNamed) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy fallback = ZeroInputPolicy();
+TEST_F(TrialDriverTest, BadSettingsAreNamed) {
   TrialDriverSettings zero = DriverSettings(Method::kAlg1);
   zero.warmup_trials = 0;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, zero, fallback); },

@@ -4,6 +4,7 @@
 #ifndef DDOC_TESTS_CORE_TWO_MODE_LQ_H_
 #define DDOC_TESTS_CORE_TWO_MODE_LQ_H_
 
+#include "ddoc/learner.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
 #include "test_systems.h"
@@ -52,6 +53,15 @@ struct LqProblem {
 };
 
 // u = 0 with planned durations (1, 1): the initial law u^0, T^0 of most tests.
+// Learner settings of the LQ tests: tight convergence, room for many trials.
+inline LearnerSettings LqTestSettings() {
+  LearnerSettings s;
+  s.epsilon = 1e-7;
+  s.max_trials = 1500;
+  s.max_samples = 10000;
+  return s;
+}
+
 inline FunctionPolicy ZeroInputPolicy() {
   return FunctionPolicy(Eigen::Vector2d(1.0, 1.0),
                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });

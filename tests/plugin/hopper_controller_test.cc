@@ -15,49 +15,12 @@
 #include <vector>
 
 #include "ddoc/mujoco/hopper_sim.h"
+#include "robot.h"
 
 namespace ddoc::plugin {
 namespace {
 
 std::string ModelPath(const std::string& name) { return std::string(DDOC_MODELS_DIR) + "/" + name; }
-
-// Owns the robot (mjModel/mjData) and a controller attached through mjcb_control.
-class Rig {
- public:
-  explicit Rig(const std::string& mjcf, ControllerConfig config = {}) {
-    model_ = LoadMjcf(ModelPath(mjcf));
-    data_.reset(mj_makeData(model_.get()));
-    config.gait.forward_speed = 0.5;
-    config.model = LoadHopperParamsFromMjcf(ModelPath(mjcf));
-    std::string error;
-    controller_ = HopperController::Create(model_.get(), config, &error);
-    EXPECT_TRUE(controller_) << error;
-    if (controller_) {
-      controller_->Reset(model_.get(), data_.get());
-      Attach(controller_.get());
-    }
-  }
-  ~Rig() { Detach(); }
-
-  // One physics step with the robot's drag, then the offline part if a hop ended (as the host
-  // loop of ddoc-hopper does); returns the foot-floor normal force after the step.
-  double Step() {
-    ApplyDragAndPush(controller_->mapping(), model_.get(), data_.get(), 0.0);
-    mj_step(model_.get(), data_.get());
-    if (controller_->offline_pending()) controller_->RunOffline();
-    return FootNormalForce(controller_->mapping(), model_.get(), data_.get());
-  }
-
-  const mjModel* m() const { return model_.get(); }
-  mjData* d() { return data_.get(); }
-  HopperController& c() { return *controller_; }
-  bool ok() const { return controller_ != nullptr; }
-
- private:
-  MjModelPtr model_;
-  MjDataPtr data_;
-  std::unique_ptr<HopperController> controller_;
-};
 
 void ExpectInputInBounds(const HopperController& c) {
   for (int i = 0; i < 4; ++i) {
@@ -123,7 +86,7 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
 TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
   ControllerConfig config;
   config.driver.warmup_trials = 1;  // the first hop initializes the learner (checked at the end)
-  Rig rig("hopper.xml", config);
+  Robot rig("hopper.xml", config, true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   const double dt = rig.m()->opt.timestep;
@@ -184,7 +147,7 @@ TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
 }
 
 TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   for (int i = 0; i < 50; ++i) rig.Step();
@@ -216,6 +179,28 @@ TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
   for (int i = 0; i < 4; ++i) EXPECT_EQ(c.last_input()[i], u[i]);
 }
 
+TEST(HopperControllerTest, AnotherModelsPassesDoNotReachTheController) {
+  // mjcb_control is global: compiling another MJCF (mj_setConst runs forward passes on a scratch
+  // mjData) or stepping another model calls the attached controller. It must ignore them: no
+  // step, no write into the foreign mjData (whose actuators may not exist).
+  Robot rig("hopper.xml", ControllerConfig(), true);
+  ASSERT_TRUE(rig.ok());
+  rig.Step();
+  const int hop = rig.c().hop();
+  const double u0 = rig.c().last_input()[0];
+  MjModelPtr other = LoadMjcf(ModelPath("hopper_m12.xml"));  // compiled while attached
+  MjDataPtr other_data(mj_makeData(other.get()));
+  for (int i = 0; i < 20; ++i) mj_step(other.get(), other_data.get());
+  EXPECT_EQ(other_data->ctrl[0], 0.0);
+  EXPECT_EQ(rig.c().hop(), hop);
+  EXPECT_EQ(rig.c().last_input()[0], u0);
+  // The robot's own steps go on from where they were.
+  const double t = rig.d()->time;
+  rig.Step();
+  EXPECT_GT(rig.d()->time, t);
+  EXPECT_FALSE(rig.c().failed()) << rig.c().error();
+}
+
 TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
   // A measured fact of MuJoCo 2.2.2 that shapes the plugin: mjd_transitionFD steps the model
   // and does not restore d->time, so a callback cannot tell its calls from real steps by time.
@@ -231,7 +216,7 @@ TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
 }
 
 TEST(HopperControllerTest, BadStatesNeverGiveNaNOrOutOfBoundsControls) {
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   for (int i = 0; i < 20; ++i) rig.Step();
@@ -268,7 +253,7 @@ TEST(HopperControllerTest, BadStatesNeverGiveNaNOrOutOfBoundsControls) {
 }
 
 TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
-  Rig rig("hopper_m12.xml");
+  Robot rig("hopper_m12.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
     rig.Step();
@@ -282,7 +267,7 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the exact model for a few hops: the learner must accept at least one trial,
   // and the nominal cost it keeps must drop below the cost of the initial hop (u^0, T^0), i.e.
   // the last warm-up hop (config.driver.warmup_trials) that initializes the learner.
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
   double initial = std::numeric_limits<double>::quiet_NaN();
@@ -310,7 +295,7 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   // gamma 0.5: one rejection
   config.driver.learner.alpha_min = 0.6 * config.driver.learner.alpha_initial;
   config.driver.warmup_trials = 2;
-  Rig rig("hopper_m12.xml", config);
+  Robot rig("hopper_m12.xml", config, true);
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
   std::vector<bool> initial_law;  // runs_initial_law() during each hop
@@ -342,7 +327,7 @@ TEST(HopperControllerTest, FrozenLawStopsLearningAndRestartsAreDeterministic) {
   // on. RestartHop(x): the hop that follows depends on x and the law only, so two restarts from
   // the same takeoff state end at the same next takeoff state, and a different start state ends
   // elsewhere. These are what ddoc-return-map's finite differences rely on.
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   auto next_takeoff = [&rig]() {
     const int hop = rig.c().hop();

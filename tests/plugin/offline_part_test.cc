@@ -11,59 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "ddoc/mujoco/hopper_sim.h"
-#include "hopper_controller.h"
+#include "robot.h"
 
 namespace ddoc::plugin {
 namespace {
-
-std::string ModelPath(const std::string& name) { return std::string(DDOC_MODELS_DIR) + "/" + name; }
-
-enum class Host { kRunsOffline, kWaitsForWorker, kNothing };
-
-// A robot with its controller; Step() is one physics step of the host loop.
-class Robot {
- public:
-  explicit Robot(ControllerConfig config, const std::string& mjcf = "hopper_m8.xml") {
-    model_ = LoadMjcf(ModelPath(mjcf));
-    data_.reset(mj_makeData(model_.get()));
-    config.gait.forward_speed = 0.5;
-    std::string error;
-    controller_ = HopperController::Create(model_.get(), config, &error);
-    EXPECT_TRUE(controller_) << error;
-    if (controller_) Restart();
-  }
-  ~Robot() { Detach(); }
-
-  void Restart() { controller_->Reset(model_.get(), data_.get()); }
-  // MuJoCo 2.2's mjcb_control is global: each step attaches this robot's controller.
-  void Step(Host host) {
-    Attach(controller_.get());
-    ApplyDragAndPush(controller_->mapping(), model_.get(), data_.get(), 0.0);
-    mj_step(model_.get(), data_.get());
-    if (host == Host::kRunsOffline && controller_->offline_pending()) controller_->RunOffline();
-    if (host == Host::kWaitsForWorker) controller_->FinishOffline();
-  }
-  // Steps until `hops` hops have reports; returns them.
-  std::vector<HopReport> Run(int hops, Host host) {
-    std::vector<HopReport> reports;
-    while (static_cast<int>(reports.size()) < hops && data_->time < 20.0) {
-      Step(host);
-      for (const HopReport& r : controller_->TakeReports()) reports.push_back(r);
-      EXPECT_FALSE(controller_->failed()) << controller_->error();
-    }
-    return reports;
-  }
-
-  mjData* d() { return data_.get(); }
-  HopperController& c() { return *controller_; }
-  bool ok() const { return controller_ != nullptr; }
-
- private:
-  MjModelPtr model_;
-  MjDataPtr data_;
-  std::unique_ptr<HopperController> controller_;
-};
 
 void ExpectSameReports(const std::vector<HopReport>& a, const std::vector<HopReport>& b) {
   ASSERT_EQ(a.size(), b.size());
@@ -92,7 +43,7 @@ ControllerConfig LearningFromHop0(double latency) {
 
 TEST(OfflinePartTest, RunsOutsideComputeAndTheLawTakesEffectAfterTheLatency) {
   const double latency = 0.02;
-  Robot robot(LearningFromHop0(latency));
+  Robot robot("hopper_m8.xml", LearningFromHop0(latency), false);
   ASSERT_TRUE(robot.ok());
   HopperController& c = robot.c();
   while (c.hop() == 0) robot.Step(Host::kNothing);
@@ -118,7 +69,7 @@ TEST(OfflinePartTest, RunsOutsideComputeAndTheLawTakesEffectAfterTheLatency) {
 }
 
 TEST(OfflinePartTest, ZeroLatencyLearnsAtTheTakeoffStep) {
-  Robot robot(LearningFromHop0(0.0));
+  Robot robot("hopper_m8.xml", LearningFromHop0(0.0), false);
   ASSERT_TRUE(robot.ok());
   HopperController& c = robot.c();
   while (c.hop() == 0) {
@@ -132,7 +83,7 @@ TEST(OfflinePartTest, ZeroLatencyLearnsAtTheTakeoffStep) {
 
 TEST(OfflinePartTest, IdenticalOutputsRunToRun) {
   ControllerConfig config;  // the defaults: 3 warm-up hops, offline_latency 20 ms
-  Robot a(config), b(config);
+  Robot a("hopper_m8.xml", config, false), b("hopper_m8.xml", config, false);
   ASSERT_TRUE(a.ok() && b.ok());
   const std::vector<HopReport> first = a.Run(8, Host::kRunsOffline);
   a.Restart();
@@ -151,7 +102,8 @@ TEST(OfflinePartTest, WorkerThreadGivesTheHostsResultsWhenTheHostWaits) {
   ControllerConfig host_config;
   ControllerConfig thread_config;
   thread_config.offline_thread = true;
-  Robot host(host_config), threaded(thread_config);
+  Robot host("hopper_m8.xml", host_config, false);
+  Robot threaded("hopper_m8.xml", thread_config, false);
   ASSERT_TRUE(host.ok() && threaded.ok());
   const std::vector<HopReport> a = host.Run(7, Host::kRunsOffline);
   const std::vector<HopReport> b = threaded.Run(7, Host::kWaitsForWorker);
