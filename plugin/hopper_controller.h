@@ -48,23 +48,18 @@ struct ControllerConfig {
   HopperCostWeights cost_weights;                      ///< weights of (42); default Fig. 2
   NominalGaitSettings gait;                            ///< the gait u^0 is solved from
   LearnerSettings model_learner = HopperLearnerSettings();  ///< the OC-FB solve on the model
-  /// alpha of u^0 = the model solve's Learner::ConvergedPolicy(alpha); with the feed-forward-only
-  /// alpha of HopperLearnerSettings, 0 = the nominal inputs plus feedback.
+  /// alpha of u^0 = Learner::ConvergedPolicy(alpha) of the model solve; 0 = nominal + feedback.
   double ocfb_alpha = 0.0;
   double dt_model = 1e-3;                ///< RK4 step of the model plant, s
   HopperModeDurations durations;         ///< duration bounds of flight and stance, s
   ContactPhaseSettings contact;          ///< the contact-phase detector (src/mujoco)
   int max_samples_per_mode = 4000;       ///< preallocated samples per mode, >= 10
-  /// I1's reference for the learner: false, the hop's own start (the paper's (42)); true, the
-  /// model gait's takeoff state (NOT the paper; scenario <learning reference="gait">).
+  /// I1 reference of the learner: false the hop's own start (42), true the gait (NOT the paper).
   bool anchor_reference = false;
-  /// Simulated time from a hop's end until the law learned from it takes effect, s, in
-  /// [0, durations.flight_min). Meanwhile the robot runs u^0. 0 = learn inside Compute at the
-  /// takeoff step (synchronous, for comparison only). Default: covers the offline part's
-  /// measured computation (docs/benchmarks.md).
+  /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
+  /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;
-  /// Run the offline part on a worker thread of the controller (as on a robot) instead of in
-  /// RunOffline() called by the host between steps. Compute never waits for it.
+  /// true: the offline part runs on a worker thread (as on a robot); false: in RunOffline().
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
 };
