@@ -4,38 +4,43 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <sstream>
-
-#include "ddoc/cost.h"
-#include "ddoc/policy.h"
 
 namespace ddoc::plugin {
 namespace {
 
-Bounds HopperBounds(const ControllerConfig& c) {
-  Bounds b;
-  b.u_min = hopper::InputLowerBound();
-  b.u_max = hopper::InputUpperBound();
-  b.duration_min = Eigen::Vector2d(c.flight_min, c.stance_min);
-  b.duration_max = Eigen::Vector2d(c.flight_max, c.stance_max);
-  return b;
-}
-
-// True when a contact between the foot geom and the floor geom exists in the current collision
-// pass (computed by mj_fwdPosition before mjcb_control) with distance below `distance`.
-bool FootTouches(const HopperMapping& map, const mjData* d, double distance) {
-  for (int i = 0; i < d->ncon; ++i) {
-    const mjContact& c = d->contact[i];
-    const bool pair = (c.geom1 == map.geom_foot && c.geom2 == map.geom_floor) ||
-                      (c.geom2 == map.geom_foot && c.geom1 == map.geom_floor);
-    if (pair && c.dist < distance) return true;
-  }
-  return false;
-}
-
 // (x, y, xd, yd) of a flight-coordinate state.
 Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
   return Eigen::Vector4d(xf(hopper::kX), xf(hopper::kY), xf(hopper::kXd), xf(hopper::kYd));
+}
+
+// Throws InvalidArgument naming the first field out of range.
+void ValidateConfig(const ControllerConfig& c) {
+  auto fail = [](const std::string& field, double value, const char* expected) {
+    std::ostringstream msg;
+    msg << "config." << field << " = " << value << ", expected " << expected;
+    throw InvalidArgument(msg.str());
+  };
+  if (!(c.dt_model > 0.0) || !std::isfinite(c.dt_model)) fail("dt_model", c.dt_model, "> 0");
+  if (c.max_samples_per_mode < 10) {
+    fail("max_samples_per_mode", c.max_samples_per_mode, ">= 10");
+  }
+  if (!(c.offline_latency >= 0.0 && c.offline_latency < c.durations.flight_min)) {
+    fail("offline_latency", c.offline_latency, "in [0, durations.flight_min)");
+  }
+  if (!(c.pitch_experiment.scale >= 0.0 && c.pitch_experiment.scale <= 1.0)) {
+    fail("pitch_experiment.scale", c.pitch_experiment.scale, "in [0, 1]");
+  }
+  if (c.pitch_experiment.from_hop < 0) {
+    fail("pitch_experiment.from_hop", c.pitch_experiment.from_hop, ">= 0");
+  }
+}
+
+ModelPlantSettings ModelPlantSettingsFor(const ControllerConfig& c) {
+  ModelPlantSettings s;
+  s.dt = c.dt_model;
+  return s;
 }
 
 HopperController* g_attached = nullptr;
@@ -46,31 +51,15 @@ void ControlCallback(const mjModel* m, mjData* d) {
 
 }  // namespace
 
-LearnerSettings HopperLearnerDefaults() {
-  LearnerSettings s;  // the default preset: kRiccati, alpha on the feed-forward only
-  s.acceptance = Acceptance::kSufficientDecrease;
-  s.interpolate_backtracking = false;
-  s.step_convergence = true;
-  s.c = 1e-7;
-  s.gamma = 0.5;
-  s.alpha_after_accept = AlphaAfterAccept::kGrow;
-  s.regularization_min = 0.01;
-  s.backward.integrator = BackwardIntegrator::kRk4;
-  s.backward.psd_switching_hessians = true;
-  s.backward.box_aware = false;
-  s.backward.time_curvature = false;
-  s.alpha_initial = 0.1;
-  return s;
-}
-
 HopperController::HopperController(const mjModel* m, const ControllerConfig& config)
     : config_(config),
       map_(HopperMapping::Build(m, "the robot's mjModel")),
       model_(config.model),
       cost_(model_, config.cost_weights),
-      problem_{&model_, &cost_, HopperBounds(config),
-               Eigen::Vector2d(cost_.weights().surface_weight, 0.0)},
-      model_plant_(problem_),
+      report_cost_(model_, config.cost_weights),
+      problem_(HopperProblem(model_, cost_, config.durations)),
+      model_plant_(problem_, ModelPlantSettingsFor(config)),
+      detector_(config.contact),
       vsa_(map_.beta) {}
 
 std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
@@ -83,6 +72,7 @@ std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
     return nullptr;
   }
   try {
+    ValidateConfig(config);
     std::unique_ptr<HopperController> c(new HopperController(m, config));
     c->Initialize();
     return c;
@@ -92,65 +82,37 @@ std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
   }
 }
 
-void HopperController::Initialize() {
-  const ControllerConfig& c = config_;
-  auto positive = [](double v, const char* name) {
-    if (!(v > 0.0) || !std::isfinite(v)) {
-      std::ostringstream msg;
-      msg << "config." << name << " must be a finite number > 0, got " << v;
-      throw InvalidArgument(msg.str());
-    }
-  };
-  positive(c.dt_model, "dt_model");
-  positive(c.min_phase_time, "min_phase_time");
-  positive(c.takeoff_force, "takeoff_force");
-  if (c.initial_hops < 1) {
-    throw InvalidArgument("config.initial_hops must be >= 1, got " +
-                          std::to_string(c.initial_hops));
-  }
-  if (!(c.flight_pitch_feedback >= 0.0 && c.flight_pitch_feedback <= 1.0)) {
-    throw InvalidArgument("config.flight_pitch_feedback must be in [0, 1], got " +
-                          std::to_string(c.flight_pitch_feedback));
-  }
-  if (c.flight_pitch_feedback_from_hop < 0) {
-    throw InvalidArgument("config.flight_pitch_feedback_from_hop must be >= 0, got " +
-                          std::to_string(c.flight_pitch_feedback_from_hop));
-  }
-  if (c.flight_pitch_feedback != 1.0) {
-    pitch_scale_ = {Vector::Ones(hopper::kFlightDim), Vector::Ones(hopper::kStanceDim)};
-    pitch_scale_[hopper::kFlight](hopper::kPhi) = c.flight_pitch_feedback;
-    pitch_scale_[hopper::kFlight](hopper::kPhid) = c.flight_pitch_feedback;
-  }
-  if (c.max_samples_per_mode < 10) {
-    throw InvalidArgument("config.max_samples_per_mode must be >= 10, got " +
-                          std::to_string(c.max_samples_per_mode));
-  }
-  problem_.Validate();  // duration bounds: reversed or non-positive -> named error
+HopperController::~HopperController() { StopWorker(); }
 
-  model_plant_.settings().dt = c.dt_model;
+void HopperController::Initialize() {
   model_plant_.set_guard([this](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
     return model_.Guard(k, x, u);
   });
-
   // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
   gait_ = FindNominalGait(config_.model, config_.gait);
-  cost_.SetReference(gait_.x0);
-  model_learner_ = std::make_unique<Learner>(problem_, config_.model_learner);
-  const Eigen::Vector2d durations(gait_.T0(0), gait_.T0(1) - gait_.T0(0));
-  const Eigen::Vector4d u0 = gait_.u0;
-  FunctionPolicy initial(durations, [u0](int, double, const ConstVectorRef&, VectorRef u) {
-    u = u0;
-  });
-  const SolveResult solved =
-      model_learner_->Solve(model_plant_, model_plant_, gait_.x0, initial);
+  Learner model_learner(problem_, config_.model_learner);
+  const SolveResult solved = SolveFromGait(model_learner, model_plant_, &cost_, gait_);
   model_cost_ = solved.cost;
   model_iterations_ = solved.iterations;
   if (!std::isfinite(model_cost_)) {
     throw InvalidArgument("the model-based initial solve produced a non-finite cost");
   }
-  recorder_.Reserve(model_, config_.max_samples_per_mode);
-  phase_psi_.setZero(config_.max_samples_per_mode);
-  phase_s_.setZero(config_.max_samples_per_mode);
+  fallback_ = model_learner.ConvergedPolicy(config_.ocfb_alpha);
+  bridge_ = fallback_;
+  const bool mrl = config_.driver.method == Method::kMrl;
+  driver_ = std::make_unique<TrialDriver>(
+      problem_, config_.driver, fallback_, mrl ? &prediction_plant_ : nullptr,
+      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
+  if (config_.pitch_experiment.scale != 1.0) {
+    pitch_scale_ = {Vector::Ones(hopper::kFlightDim), Vector::Ones(hopper::kStanceDim)};
+    pitch_scale_[hopper::kFlight](hopper::kPhi) = config_.pitch_experiment.scale;
+    pitch_scale_[hopper::kFlight](hopper::kPhid) = config_.pitch_experiment.scale;
+  }
+  for (TrajectoryRecorder& r : recorders_) r.Reserve(model_, config_.max_samples_per_mode);
+  waiting_.reserve(8);
+  if (config_.offline_thread && config_.offline_latency > 0.0) {
+    worker_ = std::thread([this] { WorkerLoop(); });
+  }
 }
 
 void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t) {
@@ -159,46 +121,48 @@ void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double*
   VsaState vs;
   WriteFlightState(map_, x, d, &vs);
   vsa_.Reset(vs);
-  mode_ = hopper::kFlight;
+  // The state is a takeoff: the foot starts on the ground, no phase change for min_phase_time.
+  detector_.Reset(hopper::kFlight, t);
   started_ = false;  // the next step begins the hop (BeginHop) at this state
-  last_event_ = t;   // the state is a takeoff: the foot starts on the ground
   have_prev_td_ = false;
   stance_first_ = false;
 }
 
 void HopperController::Reset(const mjModel* m, mjData* d) {
+  FinishOffline();
+  robot_model_ = m;
+  robot_data_ = d;
+  driver_->Reset();
+  waiting_.clear();
+  reports_.clear();
+  law_ = &fallback_;
+  law_pending_ = false;
   PlaceAtTakeoff(m, d, gait_.x0.data(), 0.0);
   hop_ = 0;
   failed_ = false;
   error_.clear();
-  reports_.clear();
   nonfinite_steps_ = 0;
   u_ = gait_.u0;
-  frozen_ = false;
-  learner_.reset();
-  if (config_.method != Method::kOcfb) {
-    learner_ = std::make_unique<Learner>(problem_, config_.learner);
-  }
-  policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-  initial_policy_ = policy_;  // the model learner no longer changes: every call gives this slot
-  policy_->BeginTrial();
+  law_->BeginTrial();
 }
 
-void HopperController::RestartHop(const mjModel* m, mjData* d,
-                                  const Eigen::Matrix<double, 14, 1>& x) {
+void HopperController::RestartHop(const mjModel* m, mjData* d, const FlightState14& x) {
   if (!x.allFinite()) {
     throw InvalidArgument("HopperController::RestartHop: the start state is not finite");
   }
+  FinishOffline();
+  if (law_pending_) {  // the law of the running hop takes effect now
+    law_ = next_law_;
+    law_pending_ = false;
+  }
   PlaceAtTakeoff(m, d, x.data(), d->time);
-  policy_->BeginTrial();
+  law_->BeginTrial();
 }
 
-bool HopperController::LearnerStoppedBeforeAccepting() const {
-  return learner_ && learner_->status() == LearnerStatus::kLineSearchFailed &&
-         learner_->iteration() == 0;
+void HopperController::Freeze() {
+  FinishOffline();
+  driver_->Freeze();
 }
-
-bool HopperController::runs_initial_law() const { return policy_ == initial_policy_; }
 
 std::vector<HopReport> HopperController::TakeReports() {
   std::vector<HopReport> out;
@@ -225,266 +189,252 @@ void HopperController::WriteHeld(const mjModel* m, mjData* d) {
 }
 
 void HopperController::Compute(const mjModel* m, mjData* d) {
+  if (m != robot_model_ || d != robot_data_) return;  // another model's pass, not our robot
   if (in_compute_) {  // nested call (e.g. a finite-difference mj_forward inside a step)
     WriteHeld(m, d);
     return;
   }
   in_compute_ = true;
   try {
-    if (!failed_ && !hold_ && (!started_ || d->time > last_time_)) {
-      NewStep(m, d);
-    }
-    WriteHeld(m, d);
+    if (!failed_ && !hold_ && (!started_ || d->time > last_time_)) Step(d);
   } catch (const std::exception& e) {
     failed_ = true;
     error_ = std::string("controller: ") + e.what();
-    WriteHeld(m, d);
   } catch (...) {
     failed_ = true;
     error_ = "controller: unknown exception";
-    WriteHeld(m, d);
   }
+  WriteHeld(m, d);
   in_compute_ = false;
 }
 
-double HopperController::LegPhase(double r, double rd) const {
-  return std::atan2(config_.model.r0 - r, -rd / phase_w_);
-}
-
-void HopperController::LoadPhaseTable() {
-  const bool learning = learner_ && config_.method != Method::kOcfb && hop_ >= config_.initial_hops;
-  const Trajectory& nominal = learning ? learner_->nominal() : model_learner_->nominal();
-  const ModeTrajectory& fl = nominal.modes[hopper::kFlight];
-  const ModeTrajectory& st = nominal.modes[hopper::kStance];
-  phase_y_td_ = fl.x(hopper::kY, fl.num_samples() - 1);
-  const double D = nominal.T(1) - nominal.T(0);
-  phase_w_ = D > 0 ? M_PI / D : 1.0;
-  phase_count_ = std::min<int>(st.num_samples(), static_cast<int>(phase_psi_.size()));
-  double run = -1e9;
-  for (int j = 0; j < phase_count_; ++j) {
-    run = std::max(run, LegPhase(st.x(hopper::kSR, j), st.x(hopper::kSRd, j)));
-    phase_psi_(j) = run;
-    phase_s_(j) = D > 0 ? (st.t(j) - nominal.T(0)) / D : 0.0;
-  }
-  phase_best_ = -1e9;
-}
-
-double HopperController::PolicyTime(double t_in_mode, const double* x) {
-  const double D = policy_->PlannedDuration(mode_);
-  if (!std::isfinite(t_in_mode)) return t_in_mode;
-  if (mode_ == hopper::kFlight) {
-    const double y = x[hopper::kY], yd = x[hopper::kYd];
-    const double g = config_.model.g;
-    const double rem = (yd + std::sqrt(yd * yd + 2.0 * g * std::max(0.0, y - phase_y_td_))) / g;
-    if (!std::isfinite(rem) || t_in_mode + rem <= 0) return t_in_mode;
-    return D * t_in_mode / (t_in_mode + rem);
-  }
-  const double psi = LegPhase(x[hopper::kSR], x[hopper::kSRd]);
-  if (!std::isfinite(psi) || phase_count_ < 2) return t_in_mode;
-  phase_best_ = std::max(phase_best_, psi);
-  if (phase_best_ <= phase_psi_(0)) return 0.0;
-  for (int j = 1; j < phase_count_; ++j) {
-    if (phase_psi_(j) >= phase_best_) {
-      const double span = phase_psi_(j) - phase_psi_(j - 1);
-      const double w = span > 0 ? (phase_best_ - phase_psi_(j - 1)) / span : 1.0;
-      return D * (phase_s_(j - 1) + w * (phase_s_(j) - phase_s_(j - 1)));
-    }
-  }
-  return D;  // past the nominal's takeoff phase
-}
-
-void HopperController::BeginHop(double t, const mjData* d) {
-  if (config_.phase_time) LoadPhaseTable();
-  MapFlightState(map_, d, vsa_.state(), xf_.data());
-  if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
-  recorder_.Clear();
-  recorder_.BeginMode(hopper::kFlight);
-  hop_start_ = t;
-  phase_start_ = t;
-  mode_ = hopper::kFlight;
-  x0_hop_ = xf_;
-  hop_x_start_ = xf_(hopper::kX);
-  apex_ = xf_(hopper::kY);
-  effort_ = 0.0;
-  hop_nonfinite_ = 0;
-}
-
-void HopperController::NewStep(const mjModel* /*m*/, mjData* d) {
+void HopperController::Step(const mjData* d) {
   const double t = d->time;
-  if (!started_) {
-    started_ = true;
-    last_time_ = t;
-    BeginHop(t, d);
-  } else {
-    // The stiffness commands of the previous step were held over [last_time_, t].
-    vsa_.Advance(t - last_time_, u_(2), u_(3));
-  }
-  const double step = t - last_time_;
+  // The stiffness commands of the previous step were held over [last_time_, t].
+  if (started_) vsa_.Advance(t - last_time_, u_(2), u_(3));
+  const double step = started_ ? t - last_time_ : 0.0;
   last_time_ = t;
 
-  // Phase detection. Touchdown: the collision pass of this step (run before mjcb_control) has
-  // a foot-floor contact, so the current state is the last one before the impact. Takeoff:
-  // the floor's vertical force on the robot, solved in the previous step (qfrc_constraint is
-  // not recomputed until after this callback), has dropped below the threshold.
-  const bool may_switch = t - last_event_ >= config_.min_phase_time;
-  if (mode_ == hopper::kFlight && may_switch &&
-      FootTouches(map_, d, config_.touchdown_distance)) {
+  // Phase (ContactPhaseDetector), then the state, mapped once in the coordinates this step needs:
+  // flight for the control in flight and for x^-(T1) at a touchdown, stance in stance.
+  const ContactChange change = detector_.Update(map_, d);
+  const bool flight = mode() == hopper::kFlight;
+  if (flight || change == ContactChange::kTouchdown) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
-    if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
-    recorder_.AddSample(t - hop_start_, xf_, u_);  // x^-(T1)
-    recorder_.EndMode();
-    recorder_.BeginMode(hopper::kStance);
-    x_td_ = xf_;
-    body_td_ = BodyState(xf_);
-    t_touchdown_ = t;
-    foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
-    foot_td_h_ = HopperModel::FootHeight(xf_);
-    mode_ = hopper::kStance;
-    phase_start_ = t;
-    last_event_ = t;
-    stance_first_ = true;
-    phase_best_ = -1e9;
-  } else if (mode_ == hopper::kStance && may_switch &&
-             d->qfrc_constraint[map_.dof_z] < config_.takeoff_force) {
-    EndHop();
-    BeginHop(t, d);
-    reports_.back().body_takeoff = BodyState(xf_);
-    last_event_ = t;
   }
+  if (!flight) MapStanceState(map_, d, vsa_.state(), xs_.data());
+  if (!started_) {
+    started_ = true;
+    BeginHop(t);
+  }
+  if (change == ContactChange::kTouchdown) Touchdown(t);
+  if (change == ContactChange::kTakeoff) {
+    EndHop(t);
+    BeginHop(t);
+  }
+  if (job_.load(std::memory_order_acquire) == Job::kDone) TakeOfflineResult();
+  DeployLawWhenDue(t);
 
-  // The measured state in the model's coordinates of the current mode.
-  double* x = nullptr;
-  int n = 0;
-  if (mode_ == hopper::kFlight) {
-    MapFlightState(map_, d, vsa_.state(), xf_.data());
-    if (config_.zero_flight_leg_rate) xf_(hopper::kRd) = 0.0;
-    x = xf_.data();
-    n = hopper::kFlightDim;
-    apex_ = std::max(apex_, xf_(hopper::kY));
-  } else {
-    MapStanceState(map_, d, vsa_.state(), xs_.data());
-    x = xs_.data();
-    n = hopper::kStanceDim;
-  }
-  Eigen::Map<const Vector> xm(x, n);
-  if (!xm.allFinite()) {
+  const Eigen::Map<const Vector> x(flight ? xf_.data() : xs_.data(),
+                                   flight ? hopper::kFlightDim : hopper::kStanceDim);
+  if (flight) report_.apex = std::max(report_.apex, xf_(hopper::kY));
+  if (!x.allFinite()) {
     ++nonfinite_steps_;
-    ++hop_nonfinite_;
+    ++report_.nonfinite;
   }
-
-  // Online update (33)-(35): the policy clamps into the bounds and never returns NaN for a
+  // The online update (33)-(35): the law clamps into the bounds and never returns NaN for a
   // non-finite state; Sanitize() is the last guard.
-  const double t_in_mode = t - phase_start_;
-  policy_->Step(mode_, config_.phase_time ? PolicyTime(t_in_mode, x) : t_in_mode, xm, u_);
+  law_->Step(mode(), t - phase_start_, x, u_);
   Sanitize();
-  effort_ += cost_.InputCost(u_) * std::max(step, map_.timestep);
-
-  // Record the sample. The touchdown step already holds x^-(T1) as the flight mode's last
-  // sample; the first stance sample is the first post-impact measurement (the next step),
-  // stamped at the switching instant T1.
-  if (mode_ == hopper::kStance && stance_first_) {
-    if (t > t_touchdown_) {
-      recorder_.AddSample(t_touchdown_ - hop_start_, xm, u_);
-      stance_first_ = false;
-    }
-  } else if (xm.allFinite()) {
-    recorder_.AddSample(t - hop_start_, xm, u_);
-  }
-  if (mode_ == hopper::kStance) last_stance_ = xs_;
+  effort_ += report_cost_.InputCost(u_) * std::max(step, map_.timestep);
+  Record(t);
+  if (!flight) last_stance_ = xs_;
 }
 
-void HopperController::EndHop() {
-  // The stance mode ends with its last recorded sample, x^-(T2).
-  recorder_.EndMode();
-  recorder_.Finish(&trial_);
-  x_to_ = last_stance_;
+void HopperController::Record(double t) {
+  TrajectoryRecorder& rec = recorders_[recording_];
+  const bool flight = mode() == hopper::kFlight;
+  const Eigen::Map<const Vector> x(flight ? xf_.data() : xs_.data(),
+                                   flight ? hopper::kFlightDim : hopper::kStanceDim);
+  // The touchdown step recorded x^-(T1) as the flight's last sample; the first stance sample is
+  // the first post-impact measurement (the next step), stamped at the switching instant T1.
+  if (!flight && stance_first_) {
+    if (t > report_.t_touchdown) {
+      last_sample_t_ = report_.t_touchdown - hop_start_;
+      rec.AddSample(last_sample_t_, x, u_);
+      stance_first_ = false;
+    }
+  } else if (x.allFinite()) {
+    last_sample_t_ = t - hop_start_;
+    rec.AddSample(last_sample_t_, x, u_);
+  }
+}
 
-  HopReport r;
-  r.hop = hop_;
-  r.t_start = hop_start_;
-  r.t_touchdown = t_touchdown_;
-  r.t_end = hop_start_ + trial_.T(1);
-  r.t1 = trial_.T(0);
-  r.t2 = trial_.T(1);
-  cost_.SetReference(x0_hop_);
-  r.terms = cost_.Terms(x_td_, x_to_, effort_);
+void HopperController::BeginHop(double t) {
+  TrajectoryRecorder& rec = recorders_[recording_];
+  rec.Clear();
+  rec.BeginMode(hopper::kFlight);
+  hop_start_ = t;
+  phase_start_ = t;
+  hop_start_state_ = xf_;
+  report_ = HopReport();
+  report_.hop = hop_;
+  report_.t_start = t;
+  report_.apex = xf_(hopper::kY);
+  effort_ = 0.0;
+}
+
+void HopperController::Touchdown(double t) {
+  TrajectoryRecorder& rec = recorders_[recording_];
+  last_sample_t_ = t - hop_start_;
+  rec.AddSample(last_sample_t_, xf_, u_);  // x^-(T1) with the input held over the last step
+  rec.EndMode();
+  rec.BeginMode(hopper::kStance);
+  x_touchdown_ = xf_;
+  report_.t_touchdown = t;
+  report_.t1 = last_sample_t_;
+  report_.body_touchdown = BodyState(xf_);
+  report_.foot_height_td = HopperModel::FootHeight(xf_);
+  foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
+  phase_start_ = t;
+  stance_first_ = true;
+}
+
+void HopperController::EndHop(double t) {
+  // The measured part of the report. The stance ends with its last recorded sample, x^-(T2).
+  recorders_[recording_].EndMode();
+  HopReport& r = report_;
+  r.t2 = last_sample_t_;
+  r.t_end = hop_start_ + r.t2;
+  report_cost_.SetReference(hop_start_state_);
+  r.terms = report_cost_.Terms(x_touchdown_, last_stance_, effort_);
   r.cost = r.terms.total();
-  r.apex = apex_;
-  r.foot_height_td = foot_td_h_;
   r.step_length = have_prev_td_ ? foot_td_x_ - prev_foot_td_x_ : 0.0;
   prev_foot_td_x_ = foot_td_x_;
   have_prev_td_ = true;
-  // COM x at takeoff from the takeoff map of the measured stance state.
-  const double x_end = foot_td_x_ - x_to_(hopper::kSR) * std::sin(x_to_(hopper::kSTheta));
-  r.speed = r.t2 > 0 ? (x_end - hop_x_start_) / r.t2 : 0.0;
-  r.alpha = policy_->alpha();
-  r.du2 = policy_->du_squared_integral();
-  r.dt2 = policy_->dT().squaredNorm();
-  r.nonfinite = hop_nonfinite_;
-  r.body_touchdown = body_td_;
+  // COM x at takeoff from the takeoff map of the last stance state.
+  const double x_end =
+      foot_td_x_ - last_stance_(hopper::kSR) * std::sin(last_stance_(hopper::kSTheta));
+  r.speed = r.t2 > 0 ? (x_end - hop_start_state_(hopper::kX)) / r.t2 : 0.0;
+  r.alpha = law_->alpha();
+  r.du2 = law_->du_squared_integral();
+  r.dt2 = law_->dT().squaredNorm();
+  r.body_takeoff = BodyState(xf_);
 
-  // The offline part for the next hop.
-  if (frozen_) {
-    cost_.SetReference(trial_.x0);
-    r.accepted = true;
-    r.learner_cost = EvaluateCost(problem_, trial_).total;
-    if (learner_) r.status = learner_->status();
-  } else if (config_.method == Method::kOcfb) {
-    r.accepted = true;
-    r.learner_cost = EvaluateCost(problem_, trial_).total;
-    policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-  } else if (hop_ + 1 < config_.initial_hops) {
-    // Warm-up: the robot settles onto its own closed-loop cycle of the initial law.
-    cost_.SetReference(trial_.x0);
-    r.accepted = true;
-    r.learner_cost = EvaluateCost(problem_, trial_).total;
-    policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-  } else if (hop_ + 1 == config_.initial_hops) {
-    // This hop ran u^0, T^0 (the OC-FB law): Algorithm 1's "Initialize".
-    cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
-    if (config_.method == Method::kMrl) {
-      Trajectory predicted;
-      mrl_plant_.Run(trial_.x0, model_learner_->ConvergedPolicy(config_.ocfb_alpha), &predicted);
-      learner_->Initialize(trial_, &predicted);
-    } else {
-      learner_->Initialize(trial_);
-    }
-    r.accepted = true;
-    r.learner_cost = learner_->nominal_cost();
-    r.status = learner_->status();
-    policy_ = &learner_->NextTrial();
-  } else {
-    cost_.SetReference(config_.anchor_reference ? Vector(gait_.x0) : trial_.x0);
-    const TrialResult tr = learner_->CompleteTrial(
-        trial_, config_.method == Method::kMrl ? &mrl_plant_ : nullptr);
-    r.accepted = tr.accepted;
-    r.learner_cost = tr.cost;
-    r.status = tr.status;
-    policy_ = &learner_->NextTrial();
-    // Terminated before any trial passed (36): the law of iteration 0 is u^0, the OC-FB law
-    // that produced the nominal, not a replay of the nominal's inputs (Learner::NextTrial).
-    if (LearnerStoppedBeforeAccepting()) {
-      policy_ = &model_learner_->ConvergedPolicy(config_.ocfb_alpha);
-    }
+  // Hand the hop to the offline part, unless it is still busy with the previous one (worker
+  // thread only): then this hop is not learned from.
+  if (job_.load(std::memory_order_acquire) != Job::kIdle) {
+    r.accepted = false;
+    r.learner_cost = std::numeric_limits<double>::quiet_NaN();
+    waiting_.push_back({r, false});
+    ++hop_;
+    law_->BeginTrial();
+    return;
   }
-  SetPitchFeedback();
-  policy_->BeginTrial();
-  reports_.push_back(r);
+  const bool learns = driver_->CompletionLearns();
+  waiting_.push_back({r, true});
+  recording_ = 1 - recording_;  // the finished hop's recorder now belongs to the offline part
+  job_hop_ = hop_;
   ++hop_;
+  job_.store(Job::kPosted, std::memory_order_release);
+  if (config_.offline_latency == 0.0) {
+    RunOffline();  // synchronous: the old behaviour, for comparison only
+    law_ = next_law_;
+  } else {
+    if (worker_.joinable()) {
+      { std::lock_guard<std::mutex> lock(worker_mutex_); }
+      worker_cv_.notify_one();
+    }
+    if (learns) {  // u^0 runs until the law learned from this hop takes effect
+      law_ = &bridge_;
+      law_pending_ = true;
+      law_due_ = t + config_.offline_latency;
+    }
+  }
+  law_->BeginTrial();
 }
 
-void HopperController::SetPitchFeedback() {
-  if (pitch_scale_.empty() || runs_initial_law()) return;  // u^0 keeps its feedback
-  const bool scaled = hop_ + 1 >= config_.flight_pitch_feedback_from_hop;
-  if (scaled != !policy_->settings().state_feedback_scale.empty()) {
-    policy_->SetStateFeedbackScale(scaled ? pitch_scale_ : std::vector<Vector>{});
+void HopperController::RunOffline() {
+  if (job_.load(std::memory_order_acquire) != Job::kPosted) return;
+  try {
+    recorders_[1 - recording_].Finish(&trial_);
+    outcome_ = driver_->CompleteTrial(trial_);
+    OnlineController* learned = driver_->learned_law();
+    if (outcome_.learned && learned != nullptr && !pitch_scale_.empty()) {
+      learned->SetStateFeedbackScale(job_hop_ + 1 >= config_.pitch_experiment.from_hop
+                                         ? pitch_scale_
+                                         : std::vector<Vector>());
+    }
+    next_law_ = learned != nullptr ? learned : &fallback_;
+    offline_error_.clear();
+  } catch (const std::exception& e) {
+    offline_error_ = std::string("offline part: ") + e.what();
+    next_law_ = &fallback_;
+  }
+  job_.store(Job::kDone, std::memory_order_release);
+  if (!worker_.joinable()) TakeOfflineResult();
+}
+
+void HopperController::TakeOfflineResult() {
+  if (job_.load(std::memory_order_acquire) != Job::kDone) return;
+  if (!offline_error_.empty()) {
+    failed_ = true;
+    error_ = offline_error_;
+  }
+  for (Waiting& w : waiting_) {
+    if (!w.needs_outcome) continue;
+    w.report.accepted = outcome_.accepted;
+    w.report.learner_cost = outcome_.cost;
+    w.report.status = outcome_.status;
+    w.needs_outcome = false;
+    break;
+  }
+  size_t done = 0;
+  while (done < waiting_.size() && !waiting_[done].needs_outcome) {
+    reports_.push_back(waiting_[done].report);
+    ++done;
+  }
+  waiting_.erase(waiting_.begin(), waiting_.begin() + static_cast<std::ptrdiff_t>(done));
+  job_.store(Job::kIdle, std::memory_order_release);
+}
+
+void HopperController::DeployLawWhenDue(double t) {
+  if (!law_pending_ || job_.load(std::memory_order_acquire) != Job::kIdle || t < law_due_) return;
+  law_ = next_law_;
+  law_->BeginTrial();
+  law_pending_ = false;
+}
+
+void HopperController::FinishOffline() {
+  if (worker_.joinable()) {
+    while (job_.load(std::memory_order_acquire) == Job::kPosted) std::this_thread::yield();
+  } else {
+    RunOffline();
+  }
+  TakeOfflineResult();
+}
+
+void HopperController::WorkerLoop() {
+  std::unique_lock<std::mutex> lock(worker_mutex_);
+  for (;;) {
+    worker_cv_.wait(lock, [this] {
+      return worker_stop_ || job_.load(std::memory_order_acquire) == Job::kPosted;
+    });
+    if (worker_stop_) return;
+    lock.unlock();
+    RunOffline();
+    lock.lock();
   }
 }
 
-void MeasuredStartModelPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) {
-  x0_ = x0;
-  if (x0_.size() == hopper::kFlightDim) x0_(hopper::kRd) = 0.0;
-  model_->Run(x0_, policy, out);
+void HopperController::StopWorker() {
+  if (!worker_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(worker_mutex_);
+    worker_stop_ = true;
+  }
+  worker_cv_.notify_one();
+  worker_.join();
 }
 
 void Attach(HopperController* controller) {

@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Read ddoc-hopper run directories; draw the panels of the paper's Fig. 2; write a results table.
 
-A run directory is what `ddoc-hopper <scenario.xml> --method M --out DIR` writes (see the README's
-results section for the format):
+A run directory is what `ddoc-hopper <scenario.xml> --method M --out DIR` writes (the format is in
+docs/hopper.md, "Output files"):
 
     hops.csv        one row per hop (= one iteration/trial of the learning loop)
     trajectory.csv  one row per control sample

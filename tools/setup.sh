@@ -9,7 +9,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 packages=(
   build-essential cmake pkg-config
   libeigen3-dev libmujoco-dev libosmesa6-dev libtinyxml2-dev liblodepng-dev libcli11-dev
-  libbenchmark-dev libgtest-dev googletest zlib1g-dev
+  libbenchmark-dev libgtest-dev googletest zlib1g-dev nlohmann-json3-dev
   ffmpeg python3-matplotlib
 )
 export DEBIAN_FRONTEND=noninteractive

@@ -4,12 +4,25 @@
 #ifndef DDOC_CHECK_DERIVATIVES_H_
 #define DDOC_CHECK_DERIVATIVES_H_
 
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "ddoc/switched_system.h"
 
 namespace ddoc {
+
+/// Central-difference Jacobian of fn: R^n -> R^r at x, the one finite-difference Jacobian of
+/// ddoc (CheckDerivatives, the tests, the nominal gait search and the return-map tools use it):
+///   J(:, i) = (fn(x + h_i e_i) - fn(x - h_i e_i)) / (2 h_i),  h_i = step * max(1, |x_i|).
+/// 2n evaluations of fn (one more when n = 0, to size J). Throws InvalidArgument when step is
+/// not finite and > 0 or when fn returns vectors of different sizes.
+Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
+                                 const ConstVectorRef& x, double step = 1e-6);
+
+/// max_ij |a - b| / max(1, max_ij |b|): the relative error CheckDerivatives reports (b is the
+/// reference, e.g. the central differences). Throws InvalidArgument when the sizes differ.
+double RelativeError(const ConstMatrixRef& a, const ConstMatrixRef& b);
 
 /// One checked derivative.
 struct DerivativeError {

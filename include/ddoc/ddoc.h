@@ -15,10 +15,12 @@
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
 #include "ddoc/return_map.h"
+#include "ddoc/sample_layout.h"
 #include "ddoc/switched_system.h"
 #include "ddoc/switching_time_update.h"
 #include "ddoc/time_normalization.h"
 #include "ddoc/trajectory.h"
+#include "ddoc/trial_driver.h"
 #include "ddoc/types.h"
 
 #endif  // DDOC_DDOC_H_

@@ -1,9 +1,11 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "run_log.h"
 
-#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
+
+#include <nlohmann/json.hpp>
 
 namespace ddoc::app {
 namespace {
@@ -16,35 +18,34 @@ std::FILE* OpenOrThrow(const std::string& path) {
   return f;
 }
 
-// JSON has no NaN/Inf: write null for them.
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
+const char* LearnerStatusName(LearnerStatus status) {
+  switch (status) {
+    case LearnerStatus::kRunning: return "running";
+    case LearnerStatus::kConverged: return "converged";
+    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
+    case LearnerStatus::kMaxTrials: return "max_trials";
+  }
+  return "?";
 }
+
+// -1 (not yet) is written as null.
+nlohmann::json HopOrNull(int hop) { return hop >= 0 ? nlohmann::json(hop) : nlohmann::json(); }
 
 }  // namespace
 
-std::string JsonEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out;
+void Summary::AddHop(const plugin::HopReport& h, bool learns) {
+  hops = h.hop + 1;
+  final_cost = h.cost;
+  final_i4 = h.terms.i4;
+  (h.accepted ? accepted : rejected) += 1;
+  if (converged_hop < 0 && h.status == LearnerStatus::kConverged) converged_hop = h.hop;
+  if (stopped_hop < 0 && h.status == LearnerStatus::kLineSearchFailed) stopped_hop = h.hop;
+  learner_status = learns ? LearnerStatusName(h.status) : "none";
+  speed_sum_ += h.speed;
+  period_sum_ += h.t2;
+  const int n = accepted + rejected;
+  mean_speed = speed_sum_ / n;
+  mean_period = period_sum_ / n;
 }
 
 RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(std::move(method)) {
@@ -71,13 +72,13 @@ RunLog::~RunLog() {
   }
 }
 
-void RunLog::WriteHop(const HopRecord& h) {
+void RunLog::WriteHop(const plugin::HopReport& h) {
   std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
                "%s\n",
-               h.hop, h.t_start, h.t_end, h.cost, h.i1, h.i2, h.i3, h.i4, h.t1, h.t2,
-               h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2, h.dt2,
-               method_.c_str());
+               h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
+               h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
+               h.dt2, method_.c_str());
   Flush();
 }
 
@@ -99,43 +100,36 @@ void RunLog::Flush() {
 }
 
 void RunLog::WriteSummary(const Summary& s) {
+  nlohmann::ordered_json j;
+  j["scenario"] = s.scenario;
+  j["method"] = s.method;
+  j["robot"] = s.robot;
+  j["model"] = s.model;
+  j["offline_latency_s"] = s.offline_latency_s;
+  j["hops"] = s.hops;
+  j["fell"] = s.fell;
+  j["fall_reason"] = s.fall_reason;
+  j["converged_hop"] = HopOrNull(s.converged_hop);
+  j["stopped_hop"] = HopOrNull(s.stopped_hop);
+  j["learner_status"] = s.learner_status;
+  j["final_cost"] = s.final_cost;  // JSON has no NaN/Inf: nlohmann writes null for them
+  j["final_I4"] = s.final_i4;
+  j["mean_speed"] = s.mean_speed;
+  j["mean_period"] = s.mean_period;
+  j["accepted"] = s.accepted;
+  j["rejected"] = s.rejected;
+  j["sim_time_s"] = s.sim_time_s;
+  j["wall_time_s"] = s.wall_time_s;
+  j["pushes"] = nlohmann::json::array();
+  for (const Push& p : s.pushes) {
+    j["pushes"].push_back({{"t", p.time}, {"force", p.force}, {"duration", p.duration}});
+  }
   const std::string tmp = dir_ + "/summary.json.tmp";
-  std::FILE* f = OpenOrThrow(tmp);
-  std::fprintf(f, "{\n");
-  std::fprintf(f, "  \"scenario\": \"%s\",\n", JsonEscape(s.scenario).c_str());
-  std::fprintf(f, "  \"method\": \"%s\",\n", JsonEscape(s.method).c_str());
-  std::fprintf(f, "  \"robot\": \"%s\",\n", JsonEscape(s.robot).c_str());
-  std::fprintf(f, "  \"model\": \"%s\",\n", JsonEscape(s.model).c_str());
-  std::fprintf(f, "  \"hops\": %d,\n", s.hops);
-  std::fprintf(f, "  \"fell\": %s,\n", s.fell ? "true" : "false");
-  std::fprintf(f, "  \"fall_reason\": \"%s\",\n", JsonEscape(s.fall_reason).c_str());
-  if (s.converged_hop >= 0) {
-    std::fprintf(f, "  \"converged_hop\": %d,\n", s.converged_hop);
-  } else {
-    std::fprintf(f, "  \"converged_hop\": null,\n");
+  {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out) throw std::runtime_error("cannot write \"" + tmp + "\"");
   }
-  if (s.stopped_hop >= 0) {
-    std::fprintf(f, "  \"stopped_hop\": %d,\n", s.stopped_hop);
-  } else {
-    std::fprintf(f, "  \"stopped_hop\": null,\n");
-  }
-  std::fprintf(f, "  \"learner_status\": \"%s\",\n", JsonEscape(s.learner_status).c_str());
-  std::fprintf(f, "  \"final_cost\": %s,\n", JsonNumber(s.final_cost).c_str());
-  std::fprintf(f, "  \"final_I4\": %s,\n", JsonNumber(s.final_i4).c_str());
-  std::fprintf(f, "  \"mean_speed\": %s,\n", JsonNumber(s.mean_speed).c_str());
-  std::fprintf(f, "  \"mean_period\": %s,\n", JsonNumber(s.mean_period).c_str());
-  std::fprintf(f, "  \"accepted\": %d,\n", s.accepted);
-  std::fprintf(f, "  \"rejected\": %d,\n", s.rejected);
-  std::fprintf(f, "  \"sim_time_s\": %s,\n", JsonNumber(s.sim_time_s).c_str());
-  std::fprintf(f, "  \"wall_time_s\": %s,\n", JsonNumber(s.wall_time_s).c_str());
-  std::fprintf(f, "  \"pushes\": [");
-  for (size_t i = 0; i < s.pushes.size(); ++i) {
-    std::fprintf(f, "%s{\"t\": %s, \"force\": %s, \"duration\": %s}", i ? ", " : "",
-                 JsonNumber(s.pushes[i].time).c_str(), JsonNumber(s.pushes[i].force).c_str(),
-                 JsonNumber(s.pushes[i].duration).c_str());
-  }
-  std::fprintf(f, "]\n}\n");
-  std::fclose(f);
   std::error_code ec;
   fs::rename(tmp, dir_ + "/summary.json", ec);
   if (ec) throw std::runtime_error("cannot write \"" + dir_ + "/summary.json\": " + ec.message());

@@ -1,6 +1,6 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
-// The output files of one ddoc-hopper run (formats in README "Output formats").
+// The output files of one ddoc-hopper run (formats in docs/hopper.md, "Output files").
 // Every file is flushed as it grows, and summary.json is rewritten after every hop,
 // so a run that falls keeps everything up to the fall.
 #ifndef DDOC_APP_RUN_LOG_H_
@@ -10,27 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "hop_report.h"
 #include "scenario.h"
 
 namespace ddoc::app {
-
-/// One row of hops.csv: one hop is one iteration (trial) of Algorithm 1.
-struct HopRecord {
-  int hop = 0;               // 0-based
-  double t_start = 0.0;      // takeoff time starting the hop [s]
-  double t_end = 0.0;        // next takeoff [s]
-  double cost = 0.0;         // I = I1 + I2 + I3 + I4 of (42), measured
-  double i1 = 0.0, i2 = 0.0, i3 = 0.0, i4 = 0.0;
-  double t1 = 0.0;           // flight duration [s]
-  double t2 = 0.0;           // hop period [s]
-  double step_length = 0.0;  // distance between consecutive touchdown feet [m]
-  double speed = 0.0;        // mean forward speed over the hop [m/s]
-  double apex = 0.0;         // max COM height in flight [m]
-  double alpha = 0.0;        // line-search parameter of this trial
-  bool accepted = false;     // (36) held
-  double du2 = 0.0;          // integral |du|^2 dtau
-  double dt2 = 0.0;          // |dT|^2
-};
 
 /// One row of trajectory.csv.
 struct SampleRecord {
@@ -49,19 +32,28 @@ struct EventRecord {
   double x = 0.0, y = 0.0, xd = 0.0, yd = 0.0;
 };
 
+/// summary.json: the run so far.
 struct Summary {
   std::string scenario, method, robot, model;
+  double offline_latency_s = 0.0;  // ControllerConfig::offline_latency of the run
   int hops = 0;
   bool fell = false;
   std::string fall_reason;
   int converged_hop = -1;    // -1: not converged
-  int stopped_hop = -1;      // hop after which the line search gave up (alpha < alpha_min); -1: never
+  int stopped_hop = -1;      // hop where the line search gave up (alpha < alpha_min); -1: never
   std::string learner_status = "running";  // running | converged | line_search_failed | none
   double final_cost = 0.0, final_i4 = 0.0, mean_speed = 0.0, mean_period = 0.0;
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
   std::vector<Push> pushes;
+
+  /// Counts a completed hop: hops, final cost and I4, accepted/rejected, the first converged
+  /// and line-search-stopped hops, the learner status ("none" when `learns` is false), means.
+  void AddHop(const plugin::HopReport& hop, bool learns);
+
+ private:
+  double speed_sum_ = 0.0, period_sum_ = 0.0;
 };
 
 /// Opens DIR/{hops,trajectory,events}.csv (creating DIR) and writes the headers.
@@ -74,8 +66,8 @@ class RunLog {
   RunLog(const RunLog&) = delete;
   RunLog& operator=(const RunLog&) = delete;
 
-  /// Appends and flushes a hop row.
-  void WriteHop(const HopRecord& hop);
+  /// Appends and flushes a hop row (hops.csv: one hop is one trial of Algorithm 1).
+  void WriteHop(const plugin::HopReport& hop);
   /// Appends a sample; flushed at the next hop or event.
   void WriteSample(const SampleRecord& sample);
   /// Appends and flushes an event (flushes the trajectory too).
@@ -94,9 +86,6 @@ class RunLog {
   std::FILE* trajectory_ = nullptr;
   std::FILE* events_ = nullptr;
 };
-
-/// Escapes a string for JSON.
-std::string JsonEscape(const std::string& text);
 
 }  // namespace ddoc::app
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <initializer_list>
 #include <sstream>
 
 #include "ddoc/hopper/hopper_model.h"
@@ -73,6 +74,31 @@ double RequiredDouble(const std::string& file, const tinyxml2::XMLElement* e, co
   return *value;
 }
 
+// Every attribute of e must be one of `known`. A removed one is named with where it went.
+void CheckAttributes(const std::string& file, const tinyxml2::XMLElement* e,
+                     std::initializer_list<const char*> known) {
+  for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a != nullptr; a = a->Next()) {
+    const std::string name = a->Name();
+    bool ok = false;
+    std::string list;
+    for (const char* k : known) {
+      ok = ok || name == k;
+      list += (list.empty() ? "" : ", ") + std::string(k);
+    }
+    if (ok) continue;
+    std::string hint;
+    if (name == "flight_pitch_feedback" || name == "flight_pitch_feedback_from_hop") {
+      hint = "; the pitch feedback experiment moved to <experiment flight_pitch_feedback=... "
+             "from_hop=...>";
+    } else if (name == "regularization_scaling" || name == "alpha_scales") {
+      hint = "; " + name + " was removed with the engine rework (docs/experiments.md)";
+    }
+    Fail(file, e->GetLineNum(),
+         "<" + std::string(e->Name()) + "> has an unknown attribute " + name + " (expected " +
+             list + ")" + hint);
+  }
+}
+
 std::string ResolvePath(const std::string& scenario_file, const char* path) {
   fs::path p(path);
   if (p.is_absolute() || scenario_file.empty()) return p.lexically_normal().string();
@@ -97,92 +123,122 @@ const char* MethodName(Method method) {
   return "?";
 }
 
+namespace {
+
+using Element = tinyxml2::XMLElement;
+
+void ParseModel(const std::string& path, const Element* e, Scenario* s) {
+  CheckAttributes(path, e, {"mjcf", "M", "J_body", "J_leg", "r0", "c_d", "beta", "g"});
+  if (const char* mjcf = e->Attribute("mjcf")) s->model_mjcf = ResolvePath(path, mjcf);
+  ModelNumbers& n = s->model_numbers;
+  n.mass = OptionalDouble(path, e, "M");
+  n.j_body = OptionalDouble(path, e, "J_body");
+  n.j_leg = OptionalDouble(path, e, "J_leg");
+  n.r0 = OptionalDouble(path, e, "r0");
+  n.drag = OptionalDouble(path, e, "c_d");
+  n.beta = OptionalDouble(path, e, "beta");
+  n.gravity = OptionalDouble(path, e, "g");
+}
+
+void ParseDuration(const std::string& path, const Element* e, Scenario* s) {
+  CheckAttributes(path, e, {"hops", "seconds"});
+  s->hops = 0;
+  if (auto hops = OptionalDouble(path, e, "hops")) {
+    if (*hops != std::floor(*hops)) {
+      Fail(path, e->GetLineNum(), "<duration> hops must be an integer");
+    }
+    s->hops = static_cast<int>(*hops);
+  }
+  s->seconds = OptionalDouble(path, e, "seconds").value_or(0.0);
+}
+
+void ParseLearning(const std::string& path, const Element* e, LearningOverrides* l) {
+  CheckAttributes(path, e,
+                  {"c", "gamma", "epsilon", "alpha_min", "max_duration_step", "regularization",
+                   "alpha_initial", "cyclic_value", "terminal", "reference",
+                   "alpha_after_accept", "delta_i", "initial_hops"});
+  l->c = OptionalDouble(path, e, "c");
+  l->gamma = OptionalDouble(path, e, "gamma");
+  l->epsilon = OptionalDouble(path, e, "epsilon");
+  l->alpha_min = OptionalDouble(path, e, "alpha_min");
+  l->max_duration_step = OptionalDouble(path, e, "max_duration_step");
+  l->regularization = OptionalDouble(path, e, "regularization");
+  l->alpha_initial = OptionalDouble(path, e, "alpha_initial");
+  l->cyclic_value = OptionalDouble(path, e, "cyclic_value");
+  if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
+    l->terminal_event = *v == "event";
+  }
+  if (auto v = OptionalChoice(path, e, "reference", "own", "gait")) {
+    l->anchor_reference = *v == "gait";
+  }
+  if (auto v = OptionalChoice(path, e, "alpha_after_accept", "reset", "grow")) {
+    l->reset_alpha_on_accept = *v == "reset";
+  }
+  l->delta_i = OptionalCount(path, e, "delta_i");
+  l->initial_hops = OptionalCount(path, e, "initial_hops");
+}
+
+// One child element of <ddoc_scenario>.
+void ParseElement(const std::string& path, const Element* e, Scenario* s) {
+  const std::string tag = e->Name();
+  const int line = e->GetLineNum();
+  if (tag == "robot") {
+    CheckAttributes(path, e, {"mjcf"});
+    const char* mjcf = e->Attribute("mjcf");
+    if (mjcf == nullptr) Fail(path, line, "<robot> is missing attribute mjcf");
+    s->robot_mjcf = ResolvePath(path, mjcf);
+  } else if (tag == "model") {
+    ParseModel(path, e, s);
+  } else if (tag == "method") {
+    CheckAttributes(path, e, {"name"});
+    const char* name = e->Attribute("name");
+    if (name == nullptr) Fail(path, line, "<method> is missing attribute name");
+    try {
+      s->method = ParseMethod(name);
+    } catch (const ScenarioError& err) {
+      Fail(path, line, err.what());
+    }
+  } else if (tag == "duration") {
+    ParseDuration(path, e, s);
+  } else if (tag == "push") {
+    CheckAttributes(path, e, {"time", "force", "duration"});
+    s->pushes.push_back({RequiredDouble(path, e, "time"), RequiredDouble(path, e, "force"),
+                         RequiredDouble(path, e, "duration")});
+  } else if (tag == "learning") {
+    ParseLearning(path, e, &s->learning);
+  } else if (tag == "experiment") {
+    CheckAttributes(path, e, {"flight_pitch_feedback", "from_hop"});
+    s->experiment.flight_pitch_feedback = OptionalDouble(path, e, "flight_pitch_feedback");
+    s->experiment.from_hop = OptionalCount(path, e, "from_hop");
+  } else if (tag == "gait") {
+    CheckAttributes(path, e, {"speed", "k0_hip", "k0_leg"});
+    s->forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
+    s->gait_k0_hip = OptionalDouble(path, e, "k0_hip");
+    s->gait_k0_leg = OptionalDouble(path, e, "k0_leg");
+  } else {
+    Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
+                     "duration, push, learning, experiment or gait)");
+  }
+}
+
+}  // namespace
+
 Scenario LoadScenario(const std::string& path) {
   if (!fs::exists(path)) Fail(path, 0, "file does not exist");
   tinyxml2::XMLDocument doc;
   if (doc.LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) {
     Fail(path, doc.ErrorLineNum(), std::string("malformed XML: ") + doc.ErrorStr());
   }
-  const tinyxml2::XMLElement* root = doc.RootElement();
+  const Element* root = doc.RootElement();
   if (root == nullptr || std::string(root->Name()) != "ddoc_scenario") {
     Fail(path, root ? root->GetLineNum() : 0, "the root element must be <ddoc_scenario>");
   }
-
+  CheckAttributes(path, root, {"name"});
   Scenario s;
   s.file = path;
-  s.name = root->Attribute("name") ? root->Attribute("name")
-                                   : fs::path(path).stem().string();
-
-  for (const tinyxml2::XMLElement* e = root->FirstChildElement(); e != nullptr;
-       e = e->NextSiblingElement()) {
-    const std::string tag = e->Name();
-    const int line = e->GetLineNum();
-    if (tag == "robot") {
-      const char* mjcf = e->Attribute("mjcf");
-      if (mjcf == nullptr) Fail(path, line, "<robot> is missing attribute mjcf");
-      s.robot_mjcf = ResolvePath(path, mjcf);
-    } else if (tag == "model") {
-      if (const char* mjcf = e->Attribute("mjcf")) s.model_mjcf = ResolvePath(path, mjcf);
-      s.model_numbers.mass = OptionalDouble(path, e, "M");
-      s.model_numbers.j_body = OptionalDouble(path, e, "J_body");
-      s.model_numbers.j_leg = OptionalDouble(path, e, "J_leg");
-      s.model_numbers.r0 = OptionalDouble(path, e, "r0");
-      s.model_numbers.drag = OptionalDouble(path, e, "c_d");
-      s.model_numbers.beta = OptionalDouble(path, e, "beta");
-      s.model_numbers.gravity = OptionalDouble(path, e, "g");
-    } else if (tag == "method") {
-      const char* name = e->Attribute("name");
-      if (name == nullptr) Fail(path, line, "<method> is missing attribute name");
-      try {
-        s.method = ParseMethod(name);
-      } catch (const ScenarioError& err) {
-        Fail(path, line, err.what());
-      }
-    } else if (tag == "duration") {
-      if (auto hops = OptionalDouble(path, e, "hops")) {
-        if (*hops != std::floor(*hops)) Fail(path, line, "<duration> hops must be an integer");
-        s.hops = static_cast<int>(*hops);
-      } else {
-        s.hops = 0;
-      }
-      s.seconds = OptionalDouble(path, e, "seconds").value_or(0.0);
-    } else if (tag == "push") {
-      Push p;
-      p.time = RequiredDouble(path, e, "time");
-      p.force = RequiredDouble(path, e, "force");
-      p.duration = RequiredDouble(path, e, "duration");
-      s.pushes.push_back(p);
-    } else if (tag == "learning") {
-      LearningOverrides& l = s.learning;
-      l.c = OptionalDouble(path, e, "c");
-      l.gamma = OptionalDouble(path, e, "gamma");
-      l.epsilon = OptionalDouble(path, e, "epsilon");
-      l.alpha_min = OptionalDouble(path, e, "alpha_min");
-      l.max_duration_step = OptionalDouble(path, e, "max_duration_step");
-      l.regularization = OptionalDouble(path, e, "regularization");
-      l.alpha_initial = OptionalDouble(path, e, "alpha_initial");
-      l.cyclic_value = OptionalDouble(path, e, "cyclic_value");
-      if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
-        l.terminal_event = *v == "event";
-      }
-      if (auto v = OptionalChoice(path, e, "reference", "own", "gait")) {
-        l.anchor_reference = *v == "gait";
-      }
-      if (auto v = OptionalChoice(path, e, "alpha_after_accept", "reset", "grow")) {
-        l.reset_alpha_on_accept = *v == "reset";
-      }
-      l.delta_i = OptionalCount(path, e, "delta_i");
-      l.initial_hops = OptionalCount(path, e, "initial_hops");
-      l.flight_pitch_feedback = OptionalDouble(path, e, "flight_pitch_feedback");
-      l.flight_pitch_feedback_from_hop = OptionalCount(path, e, "flight_pitch_feedback_from_hop");
-    } else if (tag == "gait") {
-      s.forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
-      s.gait_k0_hip = OptionalDouble(path, e, "k0_hip");
-      s.gait_k0_leg = OptionalDouble(path, e, "k0_leg");
-    } else {
-      Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
-                       "duration, push, learning or gait)");
-    }
+  s.name = root->Attribute("name") ? root->Attribute("name") : fs::path(path).stem().string();
+  for (const Element* e = root->FirstChildElement(); e != nullptr; e = e->NextSiblingElement()) {
+    ParseElement(path, e, &s);
   }
   std::sort(s.pushes.begin(), s.pushes.end(),
             [](const Push& a, const Push& b) { return a.time < b.time; });
@@ -217,11 +273,15 @@ void ValidateScenario(const Scenario& s) {
   positive(l.epsilon, "learning epsilon");
   positive(l.alpha_min, "learning alpha_min");
   positive(l.max_duration_step, "learning max_duration_step");
-  if (l.regularization && *l.regularization < 0.0) Fail(f, 0, "learning regularization must be >= 0");
-  if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) Fail(f, 0, "learning gamma must be in (0, 1)");
-  if (l.flight_pitch_feedback &&
-      !(*l.flight_pitch_feedback >= 0.0 && *l.flight_pitch_feedback <= 1.0)) {
-    Fail(f, 0, "learning flight_pitch_feedback must be in [0, 1]");
+  if (l.regularization && *l.regularization < 0.0) {
+    Fail(f, 0, "learning regularization must be >= 0");
+  }
+  if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) {
+    Fail(f, 0, "learning gamma must be in (0, 1)");
+  }
+  const std::optional<double>& pitch = s.experiment.flight_pitch_feedback;
+  if (pitch && !(*pitch >= 0.0 && *pitch <= 1.0)) {
+    Fail(f, 0, "experiment flight_pitch_feedback must be in [0, 1]");
   }
   if (l.alpha_initial && !(*l.alpha_initial > 0.0 && *l.alpha_initial <= 1.0)) {
     Fail(f, 0, "learning alpha_initial must be in (0, 1]");

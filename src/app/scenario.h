@@ -10,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "ddoc/hopper/push.h"
+#include "ddoc/trial_driver.h"
+
 namespace ddoc::app {
 
 /// A bad scenario file or flag. The message names the file, the line and the element.
@@ -18,19 +21,9 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// The three methods of Section V, all run by the same engine (see README).
-enum class Method { kAlg1, kOcfb, kMrl };
-
-/// "alg1" | "ocfb" | "mrl"; throws ScenarioError naming the bad value.
+/// "alg1" | "ocfb" | "mrl" (ddoc::Method); throws ScenarioError naming the bad value.
 Method ParseMethod(const std::string& name);
 const char* MethodName(Method method);
-
-/// A horizontal push on the body's COM: force [N] during [time, time + duration) [s].
-struct Push {
-  double time = 0.0;      // start, simulated seconds
-  double force = 0.0;     // horizontal force [N], + is forward (+x)
-  double duration = 0.1;  // [s], > 0
-};
 
 /// Model parameters given as numbers (Table I); unset fields keep the defaults of
 /// the analytic hopper. Used when the scenario has no model MJCF.
@@ -50,7 +43,7 @@ struct LearningOverrides {
   std::optional<double> gamma;              // backtracking factor
   std::optional<double> epsilon;            // convergence threshold on int|du|^2 + |dT|^2
   std::optional<int> delta_i;               // convergence window (accepted iterations)
-  std::optional<int> initial_hops;          // HopperControllerConfig::initial_hops, >= 1
+  std::optional<int> initial_hops;          // TrialDriverSettings::warmup_trials, >= 1
   std::optional<double> alpha_min;          // line search gives up below this alpha
   std::optional<double> max_duration_step;  // cap on |dD_k| of (31), s
   std::optional<double> regularization;     // LearnerSettings::regularization_min (both learners)
@@ -61,9 +54,12 @@ struct LearningOverrides {
   // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
   // model gait's takeoff state: ControllerConfig::anchor_reference)
   std::optional<bool> anchor_reference;
-  // ControllerConfig::flight_pitch_feedback (in [0, 1]) and flight_pitch_feedback_from_hop (>= 1)
-  std::optional<double> flight_pitch_feedback;
-  std::optional<int> flight_pitch_feedback_from_hop;
+};
+
+/// <experiment .../>: settings that are NOT the paper and not defaults (docs/experiments.md).
+struct ExperimentOverrides {
+  std::optional<double> flight_pitch_feedback;  // PitchFeedbackExperiment::scale, in [0, 1]
+  std::optional<int> from_hop;                  // PitchFeedbackExperiment::from_hop, >= 1
 };
 
 /// Everything one run needs. Paths are absolute or relative to the current directory
@@ -74,7 +70,7 @@ struct Scenario {
   std::string robot_mjcf;            // the true robot (required)
   std::string model_mjcf;            // the model as an MJCF ("" = use model_numbers)
   ModelNumbers model_numbers;        // the model as numbers
-  Method method = Method::kAlg1;     // alg1 | ocfb | mrl
+  Method method = Method::kAlg1;     // alg1 | ocfb | mrl (ddoc::Method)
   int hops = 100;                    // stop after this many hops (0 = use seconds)
   double seconds = 0.0;              // stop after this simulated time (0 = use hops)
   std::vector<Push> pushes;          // in time order
@@ -83,6 +79,7 @@ struct Scenario {
   // 2000 N/m). They must lie in the input bounds [10, 150] and [1780, 2350].
   std::optional<double> gait_k0_hip, gait_k0_leg;
   LearningOverrides learning;        // <learning .../>
+  ExperimentOverrides experiment;    // <experiment .../>
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.
@@ -91,7 +88,7 @@ Scenario LoadScenario(const std::string& path);
 /// Checks ranges and files (robot/model MJCF exist, hops/seconds, pushes). Throws ScenarioError.
 void ValidateScenario(const Scenario& scenario);
 
-/// Parses "time,force,duration" (a --push flag). Throws ScenarioError.
+/// Parses "TIME,FORCE,DURATION" (the --push format of every executable). Throws ScenarioError.
 Push ParsePush(const std::string& text);
 
 }  // namespace ddoc::app

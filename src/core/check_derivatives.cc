@@ -12,26 +12,51 @@ DerivativeError Compare(const std::string& name, const Matrix& analytic, const M
   DerivativeError e;
   e.name = name;
   e.max_abs_error = analytic.size() ? (analytic - fd).cwiseAbs().maxCoeff() : 0.0;
-  const double scale = std::max(1.0, fd.size() ? fd.cwiseAbs().maxCoeff() : 0.0);
-  e.max_rel_error = e.max_abs_error / scale;
+  e.max_rel_error = analytic.size() ? RelativeError(analytic, fd) : 0.0;
   return e;
 }
 
-// Central-difference Jacobian of fn: R^n -> R^r at v.
-Matrix Jacobian(const std::function<Vector(const Vector&)>& fn, const Vector& v, double step) {
-  const Vector f0 = fn(v);
-  Matrix J(f0.size(), v.size());
-  for (int i = 0; i < v.size(); ++i) {
-    const double h = step * std::max(1.0, std::abs(v(i)));
-    Vector vp = v, vm = v;
-    vp(i) += h;
-    vm(i) -= h;
-    J.col(i) = (fn(vp) - fn(vm)) / (2 * h);
+}  // namespace
+
+Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
+                                 const ConstVectorRef& x_in, double step) {
+  if (!(step > 0.0) || !std::isfinite(step)) {
+    throw InvalidArgument("CentralDifferenceJacobian: step = " + std::to_string(step) +
+                          ", expected finite and > 0");
+  }
+  const Vector x = x_in;
+  const Eigen::Index n = x.size();
+  if (n == 0) return Matrix(fn(x).size(), 0);
+  Matrix J;
+  Vector xp = x, xm = x;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double h = step * std::max(1.0, std::abs(x(i)));
+    xp(i) = x(i) + h;
+    xm(i) = x(i) - h;
+    const Vector fp = fn(xp), fm = fn(xm);
+    if (i == 0) J.resize(fp.size(), n);
+    if (fp.size() != J.rows() || fm.size() != J.rows()) {
+      throw InvalidArgument("CentralDifferenceJacobian: fn returned " + std::to_string(fp.size()) +
+                            " and " + std::to_string(fm.size()) + " values, expected " +
+                            std::to_string(J.rows()));
+    }
+    J.col(i) = (fp - fm) / (2 * h);
+    xp(i) = x(i);
+    xm(i) = x(i);
   }
   return J;
 }
 
-}  // namespace
+double RelativeError(const ConstMatrixRef& a, const ConstMatrixRef& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) {
+    throw InvalidArgument("RelativeError: sizes " + std::to_string(a.rows()) + "x" +
+                          std::to_string(a.cols()) + " and " + std::to_string(b.rows()) + "x" +
+                          std::to_string(b.cols()) + " differ");
+  }
+  if (a.size() == 0) return 0.0;
+  const double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
+  return (a - b).cwiseAbs().maxCoeff() / scale;
+}
 
 const DerivativeError* DerivativeCheckReport::Find(const std::string& name) const {
   for (const auto& e : entries) {
@@ -61,6 +86,9 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
   }
   const Vector x = x_in, u = u_in;
   const double step = settings.step;
+  const auto Fd = [step](const std::function<Vector(const Vector&)>& fn, const Vector& v) {
+    return CentralDifferenceJacobian(fn, v, step);
+  };
   DerivativeCheckReport report;
 
   Matrix fx(n, n), fu(n, m);
@@ -75,8 +103,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     system.Flow(k, x, uv, f);
     return f;
   };
-  report.entries.push_back(Compare("fx", fx, Jacobian(flow_x, x, step)));
-  report.entries.push_back(Compare("fu", fu, Jacobian(flow_u, u, step)));
+  report.entries.push_back(Compare("fx", fx, Fd(flow_x, x)));
+  report.entries.push_back(Compare("fu", fu, Fd(flow_u, u)));
 
   if (k < K - 1 || system.has_cycle_reset()) {
     const int nn = system.state_dim((k + 1) % K);
@@ -87,7 +115,7 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
       system.Reset(k, xv, g);
       return g;
     };
-    report.entries.push_back(Compare("gx", gx, Jacobian(reset, x, step)));
+    report.entries.push_back(Compare("gx", gx, Fd(reset, x)));
   }
   const int s = system.surface_dim(k);
   if (s > 0) {
@@ -98,7 +126,7 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
       system.Surface(k, xv, h);
       return h;
     };
-    report.entries.push_back(Compare("hx", hx, Jacobian(surface, x, step)));
+    report.entries.push_back(Compare("hx", hx, Fd(surface, x)));
   }
   if (cost == nullptr) return report;
 
@@ -115,8 +143,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     v(0) = cost->Running(k, x, uv);
     return v;
   };
-  report.entries.push_back(Compare("lx", lx.transpose(), Jacobian(l_x, x, step)));
-  report.entries.push_back(Compare("lu", lu.transpose(), Jacobian(l_u, u, step)));
+  report.entries.push_back(Compare("lx", lx.transpose(), Fd(l_x, x)));
+  report.entries.push_back(Compare("lu", lu.transpose(), Fd(l_u, u)));
   // Second derivatives from the analytic gradients.
   auto grad_x_of_x = [&](const Vector& xv) {
     Vector gx(n), gu(m);
@@ -136,9 +164,9 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     cost->RunningDerivatives(k, xv, u, gx, gu, a, b, c);
     return gu;
   };
-  report.entries.push_back(Compare("lxx", lxx, Jacobian(grad_x_of_x, x, step)));
-  report.entries.push_back(Compare("luu", luu, Jacobian(grad_u_of_u, u, step)));
-  report.entries.push_back(Compare("lux", lux, Jacobian(grad_u_of_x, x, step)));
+  report.entries.push_back(Compare("lxx", lxx, Fd(grad_x_of_x, x)));
+  report.entries.push_back(Compare("luu", luu, Fd(grad_u_of_u, u)));
+  report.entries.push_back(Compare("lux", lux, Fd(grad_u_of_x, x)));
 
   Vector phix(n);
   Matrix phixx(n, n);
@@ -154,8 +182,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     cost->SwitchingDerivatives(k, xv, g, H);
     return g;
   };
-  report.entries.push_back(Compare("phix", phix.transpose(), Jacobian(phi, x, step)));
-  report.entries.push_back(Compare("phixx", phixx, Jacobian(phi_grad, x, step)));
+  report.entries.push_back(Compare("phix", phix.transpose(), Fd(phi, x)));
+  report.entries.push_back(Compare("phixx", phixx, Fd(phi_grad, x)));
   return report;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "ddoc/check_derivatives.h"
 #include "ddoc/hopper/hopper_cost.h"
 
 namespace ddoc {
@@ -66,15 +67,9 @@ Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGa
   double lambda = 1e-3;
   Vec6 res = Residual(model, w, s, speed, p, nullptr);
   for (int it = 0; it < s.max_iterations; ++it) {
-    Mat6 jac;
-    for (int i = 0; i < 6; ++i) {
-      const double h = 1e-6 * std::max(1.0, std::abs(p(i)));
-      Vec6 pp = p, pm = p;
-      pp(i) += h;
-      pm(i) -= h;
-      jac.col(i) = (Residual(model, w, s, speed, pp, nullptr) -
-                    Residual(model, w, s, speed, pm, nullptr)) / (2.0 * h);
-    }
+    Mat6 jac = CentralDifferenceJacobian(
+        [&](const Vector& q) { return Vector(Residual(model, w, s, speed, Vec6(q), nullptr)); },
+        p, 1e-6);
     // Optionally yd0 (index 2) is held at the value that sets the requested apex height: with
     // drag a constant-input hop cannot be periodic, and a free yd0 may drift to the degenerate
     // "no hop" solution yd0 -> 0.

@@ -52,70 +52,14 @@ HopperParams LoadHopperParamsFromMjcf(const std::string& path) {
   return HopperParamsFromModel(m.get(), path);
 }
 
-ContactPhaseDetector::ContactPhaseDetector(const ContactDetectorSettings& s) : s_(s) {
-  if (!(s.touchdown_force > s.takeoff_force) || !(s.takeoff_force >= 0.0) ||
-      !(s.min_phase_time >= 0.0)) {
-    std::ostringstream os;
-    os << "ContactDetectorSettings: touchdown_force = " << s.touchdown_force
-       << ", takeoff_force = " << s.takeoff_force
-       << ", expected touchdown_force > takeoff_force >= 0 and min_phase_time >= 0";
-    throw InvalidArgument(os.str());
-  }
-}
-
-void ContactPhaseDetector::Reset(int mode, const HopperMapping& map, const mjData* d,
-                                 const VsaState& vsa) {
-  mode_ = mode;
-  last_event_time_ = -1e300;
-  prev_time_ = d->time;
-  MapFlightState(map, d, vsa, prev_flight_.data());
-  MapStanceState(map, d, vsa, prev_stance_.data());
-  prev_foot_ = FootPosition(map, d);
-  normal_force_ = 0.0;
-}
-
-bool ContactPhaseDetector::Update(const HopperMapping& map, const mjModel* m, const mjData* d,
-                                  const VsaState& vsa) {
-  // The force belongs to the forward pass at the previous state (time prev_time_).
-  normal_force_ = FootNormalForce(map, m, d);
-  bool fired = false;
-  const bool settled = prev_time_ - last_event_time_ >= s_.min_phase_time;
-  if (settled && mode_ == hopper::kFlight && normal_force_ > s_.touchdown_force) {
-    event_.type = ContactEvent::Type::kTouchdown;
-    event_.time = prev_time_;
-    event_.flight = prev_flight_;
-    MapStanceState(map, d, vsa, event_.stance.data());
-    event_.foot = prev_foot_;
-    event_.normal_force = normal_force_;
-    mode_ = hopper::kStance;
-    fired = true;
-  } else if (settled && mode_ == hopper::kStance && normal_force_ < s_.takeoff_force) {
-    event_.type = ContactEvent::Type::kTakeoff;
-    event_.time = prev_time_;
-    event_.stance = prev_stance_;
-    MapFlightState(map, d, vsa, event_.flight.data());
-    event_.foot = prev_foot_;
-    event_.normal_force = normal_force_;
-    mode_ = hopper::kFlight;
-    fired = true;
-  }
-  if (fired) last_event_time_ = prev_time_;
-  prev_time_ = d->time;
-  MapFlightState(map, d, vsa, prev_flight_.data());
-  MapStanceState(map, d, vsa, prev_stance_.data());
-  prev_foot_ = FootPosition(map, d);
-  return fired;
-}
-
 HopperSim::HopperSim(const std::string& mjcf_path, const HopperSimSettings& settings)
     : path_(mjcf_path),
       model_(LoadMjcf(mjcf_path)),
       data_(mj_makeData(model_.get())),
       map_(HopperMapping::Build(model_.get(), mjcf_path)),
       vsa_(map_.beta),
-      detector_(settings.detector) {
+      detector_(settings.contact) {
   HopperParamsFromModel(model_.get(), mjcf_path);  // validates masses and inertias
-  detector_.Reset(hopper::kFlight, map_, data_.get(), vsa_.state());
 }
 
 void HopperSim::SetFlightState(const Eigen::Matrix<double, 14, 1>& x, double t) {
@@ -126,7 +70,8 @@ void HopperSim::SetFlightState(const Eigen::Matrix<double, 14, 1>& x, double t) 
   vsa_.Reset(v);
   data_->time = t;
   mj_forward(model_.get(), data_.get());
-  detector_.Reset(hopper::kFlight, map_, data_.get(), vsa_.state());
+  detector_.Reset(hopper::kFlight, t);
+  stance_now_ = stance_before_ = Stance();
 }
 
 void HopperSim::SetStanceState(const Eigen::Matrix<double, 10, 1>& x, double foot_x, double t) {
@@ -137,27 +82,34 @@ void HopperSim::SetStanceState(const Eigen::Matrix<double, 10, 1>& x, double foo
   vsa_.Reset(v);
   data_->time = t;
   mj_forward(model_.get(), data_.get());
-  detector_.Reset(hopper::kStance, map_, data_.get(), vsa_.state());
-}
-
-double HopperSim::PushForce(double t) const {
-  double f = 0.0;
-  for (const Push& p : pushes_) {
-    if (t >= p.start && t < p.start + p.duration) f += p.force_x;
-  }
-  return f;
+  detector_.Reset(hopper::kStance, t);
+  stance_now_ = stance_before_ = Stance();
 }
 
 bool HopperSim::Step(const Eigen::Vector4d& u) {
   if (!u.allFinite()) throw InvalidArgument("HopperSim::Step: u is not finite");
+  const mjModel* m = model_.get();
   mjData* d = data_.get();
-  actuation_ = WriteActuation(map_, model_.get(), d, vsa_.state(), u.data());
-  ApplyDragAndPush(map_, model_.get(), d, PushForce(d->time));
-  mj_step(model_.get(), d);
-  vsa_.Advance(model_->opt.timestep, u(2), u(3));
-  const bool fired = detector_.Update(map_, model_.get(), d, vsa_.state());
-  if (fired) events_.push_back(detector_.event());
-  return fired;
+  mj_step1(m, d);  // the collision pass of the current state, as mjcb_control sees it
+  const ContactChange change = detector_.Update(map_, d);
+  if (change != ContactChange::kNone) {
+    ContactEvent e;
+    e.type = change == ContactChange::kTouchdown ? ContactEvent::Type::kTouchdown
+                                                 : ContactEvent::Type::kTakeoff;
+    e.time = d->time;
+    e.flight = Flight();
+    e.stance = stance_before_;  // takeoff: the last stance state (touchdown: filled below)
+    e.foot = Foot();
+    events_.push_back(e);
+  }
+  actuation_ = WriteActuation(map_, m, d, vsa_.state(), u.data());
+  ApplyDragAndPush(map_, m, d, PushForce(d->time));
+  mj_step2(m, d);
+  vsa_.Advance(m->opt.timestep, u(2), u(3));
+  stance_before_ = stance_now_;
+  stance_now_ = Stance();
+  if (change == ContactChange::kTouchdown) events_.back().stance = stance_now_;
+  return change != ContactChange::kNone;
 }
 
 Eigen::VectorXd HopperSim::State() const {

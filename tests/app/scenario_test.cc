@@ -84,6 +84,17 @@ TEST_F(ScenarioTest, ParsesEveryElementAndResolvesPathsAgainstTheFile) {
   EXPECT_DOUBLE_EQ(s.forward_speed, 0.5);
 }
 
+TEST_F(ScenarioTest, UnknownAndRemovedAttributesAreNamed) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  ExpectError(Fill(fmt, "regularization_scaling='per_input'"),
+              {"<learning>", "unknown attribute regularization_scaling", "removed"});
+  ExpectError(Fill(fmt, "flight_pitch_feedback='0.5'"),
+              {"unknown attribute flight_pitch_feedback", "<experiment"});
+  ExpectError(Fill(fmt, "gama='0.5'"), {"<learning>", "unknown attribute gama", "gamma"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml' mass='3'/></ddoc_scenario>",
+              {"<robot>", "unknown attribute mass", "expected mjcf"});
+}
+
 TEST_F(ScenarioTest, LearningCyclicValueAndAlphaInitial) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
   const Scenario s = LoadScenario(Write(Fill(fmt, "cyclic_value='0.9' alpha_initial='0.3'")));
@@ -137,21 +148,19 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   ExpectError(Fill(fmt, "initial_hops='1.5'"), {"initial_hops", "integer"});
 }
 
-TEST_F(ScenarioTest, LearningFlightPitchFeedback) {
-  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
-  Scenario s = LoadScenario(
-      Write(Fill(fmt, "flight_pitch_feedback='0.5' flight_pitch_feedback_from_hop='12'")));
-  ASSERT_TRUE(s.learning.flight_pitch_feedback.has_value());
-  EXPECT_EQ(*s.learning.flight_pitch_feedback, 0.5);
-  ASSERT_TRUE(s.learning.flight_pitch_feedback_from_hop.has_value());
-  EXPECT_EQ(*s.learning.flight_pitch_feedback_from_hop, 12);
-  s = LoadScenario(Write(Fill(fmt, "c='0.1'")));
-  EXPECT_FALSE(s.learning.flight_pitch_feedback.has_value());
-  EXPECT_FALSE(s.learning.flight_pitch_feedback_from_hop.has_value());
+TEST_F(ScenarioTest, PitchFeedbackExperiment) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><experiment %s/></ddoc_scenario>";
+  Scenario s = LoadScenario(Write(Fill(fmt, "flight_pitch_feedback='0.5' from_hop='12'")));
+  ASSERT_TRUE(s.experiment.flight_pitch_feedback.has_value());
+  EXPECT_EQ(*s.experiment.flight_pitch_feedback, 0.5);
+  ASSERT_TRUE(s.experiment.from_hop.has_value());
+  EXPECT_EQ(*s.experiment.from_hop, 12);
+  s = LoadScenario(Write(Fill(fmt, "")));
+  EXPECT_FALSE(s.experiment.flight_pitch_feedback.has_value());
+  EXPECT_FALSE(s.experiment.from_hop.has_value());
   ExpectError(Fill(fmt, "flight_pitch_feedback='1.5'"), {"flight_pitch_feedback", "[0, 1]"});
   ExpectError(Fill(fmt, "flight_pitch_feedback='-0.1'"), {"flight_pitch_feedback", "[0, 1]"});
-  ExpectError(Fill(fmt, "flight_pitch_feedback_from_hop='2.5'"),
-              {"flight_pitch_feedback_from_hop", "integer"});
+  ExpectError(Fill(fmt, "from_hop='2.5'"), {"from_hop", "integer"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
@@ -190,7 +199,7 @@ TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
   fs::remove_all(dir);
   {
     RunLog log(dir.string(), "alg1");
-    HopRecord h;
+    plugin::HopReport h;
     h.hop = 3;
     h.cost = 1.5;
     h.accepted = true;

@@ -3,6 +3,7 @@
 // Finite-difference checks of every derivative: the user models (through AutoDiff and the
 // shipped CheckDerivatives), and the time normalization (12)-(17) with resets and costs.
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -89,8 +90,8 @@ TEST_P(TimeNormalizationTest, EveryDerivativeMatchesCentralDifferences) {
   tn.FlowDerivatives(k, z, u, Fz, Fu);
   auto F_of_z = [&](const Vector& zz) { Vector F(nz); tn.Flow(k, zz, u, F); return F; };
   auto F_of_u = [&](const Vector& uu) { Vector F(nz); tn.Flow(k, z, uu, F); return F; };
-  EXPECT_LT(RelError(Fz, FdJacobian(F_of_z, z)), 1e-8) << "F_z";
-  EXPECT_LT(RelError(Fu, FdJacobian(F_of_u, u)), 1e-8) << "F_u";
+  EXPECT_LT(RelativeError(Fz, CentralDifferenceJacobian(F_of_z, z)), 1e-8) << "F_z";
+  EXPECT_LT(RelativeError(Fu, CentralDifferenceJacobian(F_of_u, u)), 1e-8) << "F_u";
   // The T columns: dF/dT_k = [f; 0], dF/dT_{k-1} = [-f; 0].
   Vector F(nz);
   tn.Flow(k, z, u, F);
@@ -104,8 +105,8 @@ TEST_P(TimeNormalizationTest, EveryDerivativeMatchesCentralDifferences) {
   tn.RunningDerivatives(k, z, u, Lz, Lu, Lzz, Luu, Luz);
   auto L_of_z = [&](const Vector& zz) { return Scalar(tn.Running(k, zz, u)); };
   auto L_of_u = [&](const Vector& uu) { return Scalar(tn.Running(k, z, uu)); };
-  EXPECT_LT(RelError(Lz.transpose(), FdJacobian(L_of_z, z)), 1e-8) << "L_z";
-  EXPECT_LT(RelError(Lu.transpose(), FdJacobian(L_of_u, u)), 1e-8) << "L_u";
+  EXPECT_LT(RelativeError(Lz.transpose(), CentralDifferenceJacobian(L_of_z, z)), 1e-8) << "L_z";
+  EXPECT_LT(RelativeError(Lu.transpose(), CentralDifferenceJacobian(L_of_u, u)), 1e-8) << "L_u";
   auto Lz_of_z = [&](const Vector& zz) {
     Vector a(nz), b(m);
     Matrix c(nz, nz), d(m, m), e(m, nz);
@@ -124,9 +125,9 @@ TEST_P(TimeNormalizationTest, EveryDerivativeMatchesCentralDifferences) {
     tn.RunningDerivatives(k, zz, u, a, b, c, d, e);
     return b;
   };
-  EXPECT_LT(RelError(Lzz, FdJacobian(Lz_of_z, z)), 1e-7) << "L_zz";
-  EXPECT_LT(RelError(Luu, FdJacobian(Lu_of_u, u)), 1e-7) << "L_uu";
-  EXPECT_LT(RelError(Luz, FdJacobian(Lu_of_z, z)), 1e-7) << "L_uz";
+  EXPECT_LT(RelativeError(Lzz, CentralDifferenceJacobian(Lz_of_z, z)), 1e-7) << "L_zz";
+  EXPECT_LT(RelativeError(Luu, CentralDifferenceJacobian(Lu_of_u, u)), 1e-7) << "L_uu";
+  EXPECT_LT(RelativeError(Luz, CentralDifferenceJacobian(Lu_of_z, z)), 1e-7) << "L_uz";
 
   // G_z (rectangular for k = 0: 2+3 x 3+3, k = 1: 3+3 x 2+3).
   if (k < K - 1) {
@@ -134,7 +135,7 @@ TEST_P(TimeNormalizationTest, EveryDerivativeMatchesCentralDifferences) {
     Matrix Gz(nzn, nz);
     tn.ResetDerivative(k, z, Gz);
     auto G_of_z = [&](const Vector& zz) { Vector g(nzn); tn.Reset(k, zz, g); return g; };
-    EXPECT_LT(RelError(Gz, FdJacobian(G_of_z, z)), 1e-8) << "G_z";
+    EXPECT_LT(RelativeError(Gz, CentralDifferenceJacobian(G_of_z, z)), 1e-8) << "G_z";
     Vector g(nzn);
     tn.Reset(k, z, g);
     EXPECT_EQ(g.tail(K), z.tail(K));
@@ -151,17 +152,50 @@ TEST_P(TimeNormalizationTest, EveryDerivativeMatchesCentralDifferences) {
     tn.SwitchingDerivatives(k, zz, a, b);
     return a;
   };
-  EXPECT_LT(RelError(Phiz.transpose(), FdJacobian(Phi_of_z, z)), 1e-8) << "Phi_z";
-  Matrix expected = FdJacobian(Phiz_of_z, z);
+  EXPECT_LT(RelativeError(Phiz.transpose(), CentralDifferenceJacobian(Phi_of_z, z)), 1e-8)
+      << "Phi_z";
+  Matrix expected = CentralDifferenceJacobian(Phiz_of_z, z);
   if (k == 2) {
     // h = x0^2 + x2 - 0.2 is not affine: the omitted term is 2 w h h_xx, h_xx(0,0) = 2.
     const double h = z(0) * z(0) + z(2) - 0.2;
     expected(0, 0) -= 2.0 * problem.surface_weights(2) * h * 2.0;
   }
-  EXPECT_LT(RelError(Phizz, expected), 1e-7) << "Phi_zz";
+  EXPECT_LT(RelativeError(Phizz, expected), 1e-7) << "Phi_zz";
 }
 
 INSTANTIATE_TEST_SUITE_P(AllModes, TimeNormalizationTest, ::testing::Values(0, 1, 2));
+
+TEST(Derivatives, CentralDifferenceJacobianKnownAnswers) {
+  // A quadratic map: central differences are exact up to rounding, with the step relative to
+  // max(1, |x_i|).
+  const auto fn = [](const Vector& x) {
+    Vector f(2);
+    f << x(0) * x(0) + 3.0 * x(1), 2.0 * x(0) * x(1) - x(2);
+    return f;
+  };
+  Vector x(3);
+  x << 2.0, -1.0, 1e3;
+  Matrix exact(2, 3);
+  exact << 4.0, 3.0, 0.0, -2.0, 4.0, -1.0;
+  const Matrix J = CentralDifferenceJacobian(fn, x);
+  EXPECT_LT((J - exact).cwiseAbs().maxCoeff(), 1e-6);  // rounding: eps |f| / h
+  EXPECT_EQ(RelativeError(exact, exact), 0.0);
+  EXPECT_NEAR(RelativeError(exact + Matrix::Constant(2, 3, 0.4), exact), 0.1, 1e-15);
+  // No inputs: a rows x 0 matrix.
+  EXPECT_EQ(CentralDifferenceJacobian(fn, Vector::Zero(3)).cols(), 3);
+  const auto constant = [](const Vector&) { return Vector::Ones(4); };
+  EXPECT_EQ(CentralDifferenceJacobian(constant, Vector(0)).rows(), 4);
+  // Bad input is named.
+  try {
+    CentralDifferenceJacobian(fn, x, 0.0);
+    ADD_FAILURE() << "step 0 accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("step"), std::string::npos) << e.what();
+  }
+  const auto ragged = [](const Vector& x) { return Vector::Zero(x(0) > 0 ? 2 : 3); };
+  EXPECT_THROW(CentralDifferenceJacobian(ragged, Vector::Zero(1)), InvalidArgument);
+  EXPECT_THROW(RelativeError(Matrix::Zero(2, 2), Matrix::Zero(2, 3)), InvalidArgument);
+}
 
 TEST(Derivatives, TimeNormalizationRejectsWrongSizes) {
   NonlinearSystem sys;

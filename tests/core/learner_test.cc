@@ -9,56 +9,11 @@
 
 #include "ddoc/learner.h"
 #include "test_systems.h"
+#include "two_mode_lq.h"
 
 namespace ddoc {
 namespace testing {
 namespace {
-
-// xdot = A_k x + B_k u; mode 0: double integrator, mode 1: weakly actuated damped oscillator.
-// l_k = 1/2 x'Q_k x + 1/2 r u^2 + rho_k, phi_1 = 1/2 x'S x, phi_0 = 0.
-struct TwoModeLq {
-  Eigen::Matrix2d A0, A1, Q0, Q1, S;
-  Eigen::Vector2d B0, B1, x0;
-  double r = 0.5, rho0 = 0.25, rho1 = 0.05;
-  double b_scale = 1.0;  // input gain of the plant (model mismatch when != 1)
-  TwoModeLq() {
-    A0 << 0, 1, 0, 0;
-    A1 << 0, 1, -1, -0.3;
-    B0 << 0, 1;
-    B1 << 0, 0.1;
-    Q0 = Eigen::Vector2d(1, 0.1).asDiagonal();
-    Q1 = Eigen::Vector2d(4, 0.4).asDiagonal();
-    S = Eigen::Vector2d(5, 1).asDiagonal();
-    x0 << 1, 0;
-  }
-};
-
-struct LqProblem {
-  TwoModeLq lq;
-  LinearSwitchedSystem sys;
-  QuadraticCost cost;
-  Problem problem;
-  explicit LqProblem(const TwoModeLq& l)
-      : lq(l),
-        sys({Matrix(l.A0), Matrix(l.A1)}, {Matrix(l.b_scale * l.B0), Matrix(l.b_scale * l.B1)},
-            {Matrix::Identity(2, 2), Matrix::Identity(2, 2)}),
-        cost({Matrix(l.Q0), Matrix(l.Q1)}, {Matrix::Constant(1, 1, l.r), Matrix::Constant(1, 1, l.r)},
-             {l.rho0, l.rho1}, {Matrix::Zero(2, 2), Matrix(l.S)}, {Vector::Zero(2), Vector::Zero(2)}) {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -50);
-    problem.bounds.u_max = Vector::Constant(1, 50);
-    problem.bounds.duration_min = Eigen::Vector2d(0.2, 0.3);
-    problem.bounds.duration_max = Eigen::Vector2d(2.0, 3.0);
-    problem.surface_weights = Vector::Zero(2);
-  }
-};
-
-// u = 0 with planned durations (1, 1): the initial law u^0, T^0 of most tests.
-FunctionPolicy ZeroInputPolicy() {
-  return FunctionPolicy(Eigen::Vector2d(1.0, 1.0),
-                        [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
-}
 
 // Riccati in backward time: dS/ds = A'S + SA - S B B' S / r + Q, classical RK4.
 Eigen::Matrix2d RiccatiStep(const Eigen::Matrix2d& S, const Eigen::Matrix2d& A,
@@ -101,14 +56,6 @@ Optimum DenseSearch(const TwoModeLq& lq, double d0_lo, double d0_hi, double d1_l
     }
   }
   return best;
-}
-
-LearnerSettings TestSettings() {
-  LearnerSettings s;
-  s.epsilon = 1e-7;
-  s.max_trials = 1500;
-  s.max_samples = 10000;
-  return s;
 }
 
 // 0: the default preset; 1: the paper preset.
@@ -165,17 +112,17 @@ MethodCosts RunThreeMethods(LqProblem& model, LqProblem& truth) {
   MethodCosts out;
   // Costs are always evaluated with the same cost functional (the model's; costs are exact).
   {
-    Learner alg1(model.problem, TestSettings());
+    Learner alg1(model.problem, LqTestSettings());
     out.r_alg1 = alg1.Solve(real_plant, real_plant, x0, initial);
     out.alg1 = out.r_alg1.cost;
   }
   {
-    Learner mrl(model.problem, TestSettings());
+    Learner mrl(model.problem, LqTestSettings());
     out.r_mrl = mrl.Solve(model_plant, real_plant, x0, initial);
     out.mrl = out.r_mrl.cost;
   }
   {
-    Learner ocfb(model.problem, TestSettings());
+    Learner ocfb(model.problem, LqTestSettings());
     out.r_ocfb = ocfb.Solve(model_plant, model_plant, x0, initial);
     Trajectory applied;
     real_plant.Run(x0, ocfb.ConvergedPolicy(), &applied);
@@ -217,7 +164,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
   settings.gamma = 0.5;
   settings.interpolate_backtracking = false;
@@ -250,7 +197,7 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   plant.Run(lq.x0, replay, &measured);
   EXPECT_NEAR(EvaluateCost(p.problem, measured).total, cost0, 1e-9 * cost0);
   // An aborted trial (robot fell) also counts as rejected.
-  Learner other(p.problem, TestSettings());
+  Learner other(p.problem, LqTestSettings());
   other.Initialize(measured);
   other.NextTrial();
   const TrialResult aborted = other.AbortTrial();
@@ -269,7 +216,7 @@ TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
   FunctionPolicy initial = ZeroInputPolicy();
   Trajectory measured;
   plant.Run(lq.x0, initial, &measured);
-  Learner learner(p.problem, TestSettings()), reference(q.problem, TestSettings());
+  Learner learner(p.problem, LqTestSettings()), reference(q.problem, LqTestSettings());
   learner.Initialize(measured);
   reference.Initialize(measured);
   const double cost = learner.nominal_cost();
@@ -281,7 +228,7 @@ TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {
   EXPECT_EQ(learner.nominal_cost(), cost);  // the measured I^i is kept
   learner.NextTrial();
   EXPECT_THROW(learner.RecomputeDirection(), InvalidArgument);  // a trial is pending
-  Learner fresh(p.problem, TestSettings());
+  Learner fresh(p.problem, LqTestSettings());
   EXPECT_THROW(fresh.RecomputeDirection(), InvalidArgument);   // not initialized
 }
 
@@ -290,7 +237,7 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = TestSettings();
+  LearnerSettings settings = LqTestSettings();
   settings.alpha_min = 0.3;  // two rejections in a row terminate
   settings.alpha_after_accept = AlphaAfterAccept::kReset;
   Learner learner(p.problem, settings);

@@ -5,32 +5,24 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
 
 #include "ddoc/switched_system.h"
 
 namespace ddoc {
 namespace testing {
 
-/// Central-difference Jacobian of fn at v (step h * max(1, |v_i|)).
-inline Matrix FdJacobian(const std::function<Vector(const Vector&)>& fn, const Vector& v,
-                         double h = 1e-6) {
-  const Vector f0 = fn(v);
-  Matrix J(f0.size(), v.size());
-  for (int i = 0; i < v.size(); ++i) {
-    const double step = h * std::max(1.0, std::abs(v(i)));
-    Vector vp = v, vm = v;
-    vp(i) += step;
-    vm(i) -= step;
-    J.col(i) = (fn(vp) - fn(vm)) / (2 * step);
+/// Runs f and expects an InvalidArgument whose message contains `text`.
+inline void ExpectThrowsWith(const std::function<void()>& f, const std::string& text) {
+  try {
+    f();
+    ADD_FAILURE() << "no exception, expected one with \"" << text << "\"";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
   }
-  return J;
-}
-
-/// max |a - b| / max(1, max |b|).
-inline double RelError(const Matrix& a, const Matrix& b) {
-  const double scale = std::max(1.0, b.cwiseAbs().maxCoeff());
-  return (a - b).cwiseAbs().maxCoeff() / scale;
 }
 
 inline Vector Scalar(double v) {

@@ -9,7 +9,7 @@
 namespace ddoc::testing {
 
 // Flight-state energy with constant stiffnesses (kd = 0) and input u: the Lagrangian of
-// DESIGN.md plus the VSA spring potentials
+// the design notes (docs/hopper.md) plus the VSA spring potentials
 //   V = -tau0 (phi - theta) + 1/2 k_hip (phi - theta)^2 - F0 r + 1/2 k_leg (r - r0)^2.
 inline double FlightEnergy(const HopperParams& p, const Eigen::Matrix<double, 14, 1>& x,
                            const Eigen::Vector4d& u) {

@@ -5,13 +5,11 @@
 
 #include <gtest/gtest.h>
 
-#include "fd.h"
+#include "ddoc/check_derivatives.h"
 
 namespace ddoc {
 namespace {
 
-using testing::FdJacobian;
-using testing::RelErr;
 
 Eigen::VectorXd Random(int n, std::mt19937* rng, double scale) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -67,9 +65,9 @@ TEST(HopperCostTest, DerivativesMatchFiniteDifferences) {
           cost.RunningDerivatives(k, x, uu, a, b, c, d, e);
           return b;
         };
-        EXPECT_LT(RelErr(lu.transpose(), FdJacobian(l_of_u, u)), 1e-7);
-        EXPECT_LT(RelErr(lx.transpose(), FdJacobian(l_of_x, x)), 1e-7);
-        EXPECT_LT(RelErr(luu, FdJacobian(lu_of_u, u)), 1e-7);
+        EXPECT_LT(RelativeError(lu.transpose(), CentralDifferenceJacobian(l_of_u, u)), 1e-7);
+        EXPECT_LT(RelativeError(lx.transpose(), CentralDifferenceJacobian(l_of_x, x)), 1e-7);
+        EXPECT_LT(RelativeError(luu, CentralDifferenceJacobian(lu_of_u, u)), 1e-7);
         EXPECT_EQ(lxx.norm(), 0.0);
         EXPECT_EQ(lux.norm(), 0.0);
         // Switching cost: gradient from values, Hessian from gradients.
@@ -85,8 +83,9 @@ TEST(HopperCostTest, DerivativesMatchFiniteDifferences) {
           cost.SwitchingDerivatives(k, xx, g, h);
           return g;
         };
-        EXPECT_LT(RelErr(phix.transpose(), FdJacobian(phi, x)), 1e-6) << "k " << k;
-        EXPECT_LT(RelErr(phixx, FdJacobian(grad, x)), 1e-6) << "k " << k;
+        EXPECT_LT(RelativeError(phix.transpose(), CentralDifferenceJacobian(phi, x)), 1e-6)
+            << "k " << k;
+        EXPECT_LT(RelativeError(phixx, CentralDifferenceJacobian(grad, x)), 1e-6) << "k " << k;
         EXPECT_LT((phixx - phixx.transpose()).norm(), 1e-9);
       }
     }

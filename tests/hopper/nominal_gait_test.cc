@@ -6,7 +6,8 @@
 namespace ddoc {
 namespace {
 
-// DESIGN.md's expected gait scale (own simulation of the stance model, M = 10 kg, k = 2000 N/m).
+// The expected gait scale of the design notes (docs/hopper.md, the nominal gait; own simulation of
+// the stance model, M = 10 kg, k = 2000 N/m).
 void ExpectInDesignRange(const NominalGait& g) {
   EXPECT_GE(g.stance_time, 0.25);
   EXPECT_LE(g.stance_time, 0.33);

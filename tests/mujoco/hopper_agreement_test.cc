@@ -121,7 +121,7 @@ TEST(HopperAgreementTest, StancePhaseAgrees) {
   std::printf("[agreement] stance %.3f s: max |dtheta| %.3g rad, |dphi| %.3g rad, |dr| %.3g m, "
               "foot drift %.3g m, takeoff at %.4f s (analytic %.4f s)\n",
               stance_an, eth, ephi, er, efoot, stance_mj, stance_an);
-  // Tolerances (README): the MuJoCo foot sinks up to ~1 mm into the floor under the leg force
+  // Tolerances (docs/hopper.md, "Agreement"): the MuJoCo foot sinks up to ~1 mm into the floor under the leg force
   // (soft contact, solimp) and rolls on its 2 mm radius; the 2 g foot and the 1 g leg shift M and
   // J_leg by 0.03 % / 0.4 %; and the springs are sampled at 0.5 ms. Together: a few mm / mrad.
   // Measured: 0.87 mrad, 0.40 mrad, 0.42 mm, foot drift 0.64 mm.

@@ -15,50 +15,12 @@
 #include <vector>
 
 #include "ddoc/mujoco/hopper_sim.h"
+#include "robot.h"
 
 namespace ddoc::plugin {
 namespace {
 
 std::string ModelPath(const std::string& name) { return std::string(DDOC_MODELS_DIR) + "/" + name; }
-
-// Owns the robot (mjModel/mjData) and a controller attached through mjcb_control.
-class Rig {
- public:
-  // The robot `mjcf`; the controller's model is the robot's own parameters unless `model` is
-  // given (an inexact model).
-  explicit Rig(const std::string& mjcf, ControllerConfig config = {},
-               const HopperParams* model = nullptr) {
-    model_ = LoadMjcf(ModelPath(mjcf));
-    data_.reset(mj_makeData(model_.get()));
-    config.gait.forward_speed = 0.5;
-    config.model = model != nullptr ? *model : LoadHopperParamsFromMjcf(ModelPath(mjcf));
-    std::string error;
-    controller_ = HopperController::Create(model_.get(), config, &error);
-    EXPECT_TRUE(controller_) << error;
-    if (controller_) {
-      controller_->Reset(model_.get(), data_.get());
-      Attach(controller_.get());
-    }
-  }
-  ~Rig() { Detach(); }
-
-  // One physics step with the robot's drag; returns the foot-floor normal force after it.
-  double Step() {
-    ApplyDragAndPush(controller_->mapping(), model_.get(), data_.get(), 0.0);
-    mj_step(model_.get(), data_.get());
-    return FootNormalForce(controller_->mapping(), model_.get(), data_.get());
-  }
-
-  const mjModel* m() const { return model_.get(); }
-  mjData* d() { return data_.get(); }
-  HopperController& c() { return *controller_; }
-  bool ok() const { return controller_ != nullptr; }
-
- private:
-  MjModelPtr model_;
-  MjDataPtr data_;
-  std::unique_ptr<HopperController> controller_;
-};
 
 void ExpectInputInBounds(const HopperController& c) {
   for (int i = 0; i < 4; ++i) {
@@ -76,19 +38,30 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   EXPECT_NE(error.find("mjModel is null"), std::string::npos) << error;
 
   ControllerConfig reversed;
-  reversed.flight_min = 2.0;  // > flight_max = 1.5
+  reversed.durations.flight_min = 2.0;  // > flight_max = 1.5
   EXPECT_EQ(HopperController::Create(model.get(), reversed, &error), nullptr);
   EXPECT_NE(error.find("duration"), std::string::npos) << error;
 
   ControllerConfig bad_pitch;
-  bad_pitch.flight_pitch_feedback = 1.5;
+  bad_pitch.pitch_experiment.scale = 1.5;
   EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("flight_pitch_feedback must be in [0, 1], got 1.5"), std::string::npos)
+  EXPECT_NE(error.find("pitch_experiment.scale = 1.5, expected in [0, 1]"), std::string::npos)
       << error;
-  bad_pitch.flight_pitch_feedback = 0.5;
-  bad_pitch.flight_pitch_feedback_from_hop = -1;
+  bad_pitch.pitch_experiment.scale = 0.5;
+  bad_pitch.pitch_experiment.from_hop = -1;
   EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("flight_pitch_feedback_from_hop must be >= 0"), std::string::npos) << error;
+  EXPECT_NE(error.find("pitch_experiment.from_hop = -1, expected >= 0"), std::string::npos)
+      << error;
+
+  ControllerConfig bad_latency;
+  bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
+  EXPECT_EQ(HopperController::Create(model.get(), bad_latency, &error), nullptr);
+  EXPECT_NE(error.find("offline_latency = 0.06"), std::string::npos) << error;
+
+  ControllerConfig bad_warmup;
+  bad_warmup.driver.warmup_trials = 0;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_warmup, &error), nullptr);
+  EXPECT_NE(error.find("warmup_trials = 0"), std::string::npos) << error;
 
   ControllerConfig bad_model;
   bad_model.model.M = -1.0;
@@ -112,8 +85,8 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
 
 TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
   ControllerConfig config;
-  config.initial_hops = 1;  // the first hop initializes the learner (checked at the end)
-  Rig rig("hopper.xml", config);
+  config.driver.warmup_trials = 1;  // the first hop initializes the learner (checked at the end)
+  Robot rig("hopper.xml", config, true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   const double dt = rig.m()->opt.timestep;
@@ -126,7 +99,7 @@ TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
   int mode = c.mode();
   double first_force_time = -1, touchdown_time = -1, takeoff_time = -1;
   std::vector<double> force_gone;  // steps after which the force dropped below the threshold
-  const double threshold = c.config().takeoff_force;
+  const double threshold = c.config().contact.takeoff_force;
   double prev_force = 0;
   while (c.hop() < 1 && rig.d()->time < 2.0) {
     const double t_before = rig.d()->time;
@@ -174,7 +147,7 @@ TEST(HopperControllerTest, SwitchesPhaseOnContactAndRecordsTheMappedState) {
 }
 
 TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   for (int i = 0; i < 50; ++i) rig.Step();
@@ -206,10 +179,32 @@ TEST(HopperControllerTest, ReentryAtTheSameTimeChangesNothing) {
   for (int i = 0; i < 4; ++i) EXPECT_EQ(c.last_input()[i], u[i]);
 }
 
+TEST(HopperControllerTest, AnotherModelsPassesDoNotReachTheController) {
+  // mjcb_control is global: compiling another MJCF (mj_setConst runs forward passes on a scratch
+  // mjData) or stepping another model calls the attached controller. It must ignore them: no
+  // step, no write into the foreign mjData (whose actuators may not exist).
+  Robot rig("hopper.xml", ControllerConfig(), true);
+  ASSERT_TRUE(rig.ok());
+  rig.Step();
+  const int hop = rig.c().hop();
+  const double u0 = rig.c().last_input()[0];
+  MjModelPtr other = LoadMjcf(ModelPath("hopper_m12.xml"));  // compiled while attached
+  MjDataPtr other_data(mj_makeData(other.get()));
+  for (int i = 0; i < 20; ++i) mj_step(other.get(), other_data.get());
+  EXPECT_EQ(other_data->ctrl[0], 0.0);
+  EXPECT_EQ(rig.c().hop(), hop);
+  EXPECT_EQ(rig.c().last_input()[0], u0);
+  // The robot's own steps go on from where they were.
+  const double t = rig.d()->time;
+  rig.Step();
+  EXPECT_GT(rig.d()->time, t);
+  EXPECT_FALSE(rig.c().failed()) << rig.c().error();
+}
+
 TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
   // A measured fact of MuJoCo 2.2.2 that shapes the plugin: mjd_transitionFD steps the model
   // and does not restore d->time, so a callback cannot tell its calls from real steps by time.
-  // Hence HoldScope. If this test fails, MuJoCo changed and the README note can go.
+  // Hence HoldScope. If this test fails, MuJoCo changed and the note in plugin/README.md can go.
   MjModelPtr model = LoadMjcf(ModelPath("hopper.xml"));
   MjDataPtr data(mj_makeData(model.get()));
   data->qpos[1] = 0.9;
@@ -221,7 +216,7 @@ TEST(HopperControllerTest, MujocoFiniteDifferencingAdvancesTime) {
 }
 
 TEST(HopperControllerTest, BadStatesNeverGiveNaNOrOutOfBoundsControls) {
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   HopperController& c = rig.c();
   for (int i = 0; i < 20; ++i) rig.Step();
@@ -258,7 +253,7 @@ TEST(HopperControllerTest, BadStatesNeverGiveNaNOrOutOfBoundsControls) {
 }
 
 TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
-  Rig rig("hopper_m12.xml");
+  Robot rig("hopper_m12.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
     rig.Step();
@@ -268,44 +263,20 @@ TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
   EXPECT_EQ(rig.c().hop(), 3);
 }
 
-TEST(HopperControllerTest, PhaseTimeKeepsInputsInBoundsAndHops) {
-  // The phase-based time mapping (config.phase_time) changes only the controller's tau: the
-  // robot keeps hopping for a few hops, inputs stay in the bounds, and the recorded hop times
-  // are the measured ones (T2 of a report equals its takeoff minus its start).
-  ControllerConfig config;
-  config.phase_time = true;
-  Rig rig("hopper_m12.xml", config);
-  ASSERT_TRUE(rig.ok());
-  std::vector<HopReport> reports;
-  while (rig.c().hop() < 3 && rig.d()->time < 4.0) {
-    rig.Step();
-    ExpectInputInBounds(rig.c());
-    for (const HopReport& r : rig.c().TakeReports()) reports.push_back(r);
-    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
-  }
-  ASSERT_EQ(reports.size(), 3u);
-  for (const HopReport& r : reports) {
-    EXPECT_NEAR(r.t2, r.t_end - r.t_start, 1e-9);
-    EXPECT_GT(r.t1, 0.1);
-    EXPECT_GT(r.apex, 0.7);
-  }
-}
-
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the paper's inexact model (10 kg, no drag) on the 8 kg robot with drag: the
   // initial law u^0 from the model hops badly on the robot (the last warm-up hop, which
   // initializes the learner, costs ~20), and within a few learning hops the nominal the learner
   // keeps must cost a quarter of that or less. (With the exact model there is nothing to learn:
   // its hop-to-hop cost varies by ~0.01, more than a few hops of learning can gain.)
-  const HopperParams model = LoadHopperParamsFromMjcf(ModelPath("hopper.xml"));  // 10 kg, no drag
-  Rig rig("hopper_m8.xml", ControllerConfig{}, &model);
+  Robot rig("hopper_m8.xml", ControllerConfig(), false);  // the model: 10 kg, no drag
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
   double initial = std::numeric_limits<double>::quiet_NaN();
   while (rig.c().hop() < 10 && rig.d()->time < 10.0) {
     rig.Step();
     for (const HopReport& r : rig.c().TakeReports()) {
-      if (r.hop + 1 == rig.c().config().initial_hops) initial = rig.c().learner()->nominal_cost();
+      if (r.hop + 1 == rig.c().config().driver.warmup_trials) initial = rig.c().learner()->nominal_cost();
       reports.push_back(r);
     }
     ASSERT_FALSE(rig.c().failed()) << rig.c().error();
@@ -313,7 +284,7 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   ASSERT_EQ(reports.size(), 10u);
   ASSERT_GT(initial, 5.0) << "the model's law should hop badly on the lighter robot";
   int accepted = 0;
-  for (const HopReport& r : reports) accepted += r.hop >= rig.c().config().initial_hops && r.accepted;
+  for (const HopReport& r : reports) accepted += r.hop >= rig.c().config().driver.warmup_trials && r.accepted;
   EXPECT_GE(accepted, 2);
   EXPECT_LT(rig.c().learner()->nominal_cost(), 0.25 * initial);
 }
@@ -323,10 +294,11 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   // trial terminates the line search with no accepted iteration. From then on the robot must run
   // u^0, the OC-FB law, not a replay of the measured nominal's inputs.
   ControllerConfig config;
-  config.learner.c = 1e12;
-  config.learner.alpha_min = 0.6 * config.learner.alpha_initial;  // gamma 0.5: one rejection
-  config.initial_hops = 2;
-  Rig rig("hopper_m12.xml", config);
+  config.driver.learner.c = 1e12;
+  // gamma 0.5: one rejection
+  config.driver.learner.alpha_min = 0.6 * config.driver.learner.alpha_initial;
+  config.driver.warmup_trials = 2;
+  Robot rig("hopper_m12.xml", config, true);
   ASSERT_TRUE(rig.ok());
   std::vector<HopReport> reports;
   std::vector<bool> initial_law;  // runs_initial_law() during each hop
@@ -358,7 +330,7 @@ TEST(HopperControllerTest, FrozenLawStopsLearningAndRestartsAreDeterministic) {
   // on. RestartHop(x): the hop that follows depends on x and the law only, so two restarts from
   // the same takeoff state end at the same next takeoff state, and a different start state ends
   // elsewhere. These are what ddoc-return-map's finite differences rely on.
-  Rig rig("hopper.xml");
+  Robot rig("hopper.xml", ControllerConfig(), true);
   ASSERT_TRUE(rig.ok());
   auto next_takeoff = [&rig]() {
     const int hop = rig.c().hop();

@@ -62,6 +62,14 @@ class ReproduceDryRunTest(TempDirTest):
                          | {("push_m12", "alg1")})
         self.assertTrue(all(h == "7" for *_, h, _ in cases))
 
+    def test_offline_latency_is_passed_on_only_when_given(self):
+        p = run_tool("reproduce", "--dry-run", "--offline-latency", "0", "--only", "exact_m8")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        for *_, argv in parse(p.stdout):
+            self.assertEqual(argv[argv.index("--offline-latency") + 1], "0.0")
+        p = run_tool("reproduce", "--dry-run", "--only", "inexact_m8")
+        self.assertTrue(all("--offline-latency" not in argv for *_, argv in parse(p.stdout)))
+
     def test_bad_options(self):
         p = run_tool("reproduce", "--dry-run", "--only", "no_such_case")
         self.assertEqual(p.returncode, 2)

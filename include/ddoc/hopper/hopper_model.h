@@ -6,7 +6,7 @@
 //   mode 0 = flight (n = 14), eq. (38) + VSA;  touchdown reset g_0 = (40): 14 -> 10
 //   mode 1 = stance (n = 10), eq. (39) + VSA;  takeoff map g_1 (cycle reset): 10 -> 14
 //
-// Conventions (DESIGN.md, checked numerically against the MJCF robot): x right, y up; theta is the
+// Conventions (docs/hopper.md, checked numerically against the MJCF robot): x right, y up; theta is the
 // leg angle from the downward vertical, counter-clockwise positive; the foot is at
 // (x, y) + r (sin theta, -cos theta); the hip torque acts +tau on the body and -tau on the leg.
 #ifndef DDOC_HOPPER_HOPPER_MODEL_H_
@@ -49,7 +49,7 @@ Eigen::Vector4d InputUpperBound();
 /// Which velocity jump the touchdown reset (40)-(41) uses.
 enum class ImpactModel {
   /// Physics of a massless leg with inertia J_leg pinned at the foot (default; matches the MJCF
-  /// robot, see README): ratio J_leg / (J_leg + M r^2) with the actual leg length r at touchdown.
+  /// robot, see docs/hopper.md): ratio J_leg / (J_leg + M r^2) with the actual leg length r at touchdown.
   kMasslessLeg,
   /// The paper as printed: ratio J_body / (J_body + M r0^2), theta-row M r0 / J_body.
   kPaperLiteral,

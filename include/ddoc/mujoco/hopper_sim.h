@@ -2,7 +2,7 @@
 //
 // The MuJoCo harness of the "true robot": loads an MJCF hopper, owns mjModel/mjData, keeps the
 // VSA stiffness states beside the simulation, applies drag and pushes through xfrc_applied and
-// detects touchdown/takeoff from the foot-floor normal force with hysteresis.
+// detects touchdown/takeoff with the ContactPhaseDetector (the rule the controller plugin uses).
 #ifndef DDOC_MUJOCO_HOPPER_SIM_H_
 #define DDOC_MUJOCO_HOPPER_SIM_H_
 
@@ -14,7 +14,9 @@
 #include <mujoco/mujoco.h>
 
 #include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/push.h"
 #include "ddoc/hopper/vsa.h"
+#include "ddoc/mujoco/contact_phase.h"
 #include "ddoc/mujoco/hopper_mapping.h"
 
 namespace ddoc {
@@ -41,66 +43,25 @@ using MjModelPtr = std::unique_ptr<mjModel, MjModelDeleter>;
 using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
 MjModelPtr LoadMjcf(const std::string& path);
 
-/// Settings of the contact-phase detector (hysteresis on the foot-floor normal force).
-struct ContactDetectorSettings {
-  double touchdown_force = 1.0;  ///< flight -> stance when the normal force exceeds this, N
-  double takeoff_force = 0.1;    ///< stance -> flight when it drops below this, N
-  double min_phase_time = 0.02;  ///< no switch back within this time after an event, s
-};
-
-/// A touchdown or takeoff measured on the MuJoCo robot.
+/// A touchdown or takeoff measured on the MuJoCo robot by the ContactPhaseDetector.
 struct ContactEvent {
   enum class Type { kTouchdown, kTakeoff };
   Type type = Type::kTouchdown;
-  /// Time of the forward pass in which the normal force crossed the threshold, i.e. the start of
-  /// the step during which the contact impulse (touchdown) acted / the last contact step ended.
+  /// Time of the step at which the detector fired: touchdown, the last state before the impact;
+  /// takeoff, the first state of the flight (ContactPhaseDetector).
   double time = 0.0;
-  /// Touchdown: the flight state BEFORE (at `time`, before the impulse). Takeoff: the flight state
-  /// AFTER (one step later, at time + dt).
+  /// Touchdown: the flight state BEFORE the impact (at `time`). Takeoff: the flight state AFTER
+  /// (the first flight state, at `time`).
   Eigen::Matrix<double, 14, 1> flight = Eigen::Matrix<double, 14, 1>::Zero();
-  /// Touchdown: the stance state AFTER (at time + dt). Takeoff: the stance state BEFORE (at time).
+  /// Touchdown: the stance state AFTER the impact (one step after `time`). Takeoff: the stance
+  /// state BEFORE (the last stance state, one step before `time`).
   Eigen::Matrix<double, 10, 1> stance = Eigen::Matrix<double, 10, 1>::Zero();
-  Eigen::Vector2d foot = Eigen::Vector2d::Zero();  ///< foot centre at the event
-  double normal_force = 0.0;  ///< the force that triggered the event, N
-};
-
-/// Contact-phase detector. Call Update() after every mj_step (it needs d->efc_force of the
-/// step's forward pass). Allocation-free.
-class ContactPhaseDetector {
- public:
-  explicit ContactPhaseDetector(const ContactDetectorSettings& s = ContactDetectorSettings());
-
-  /// Starts in `mode` (hopper::kFlight or kStance) at the current state of d.
-  void Reset(int mode, const HopperMapping& map, const mjData* d, const VsaState& vsa);
-  /// Returns true when an event happened in the last step; event() then holds it.
-  bool Update(const HopperMapping& map, const mjModel* m, const mjData* d, const VsaState& vsa);
-
-  int mode() const { return mode_; }
-  const ContactEvent& event() const { return event_; }
-  double normal_force() const { return normal_force_; }
-
- private:
-  ContactDetectorSettings s_;
-  int mode_ = 0;                         // hopper::kFlight / kStance
-  double last_event_time_ = -1e300;      // s
-  double prev_time_ = 0.0;               // time of the previous Update, s
-  Eigen::Matrix<double, 14, 1> prev_flight_ = Eigen::Matrix<double, 14, 1>::Zero();
-  Eigen::Matrix<double, 10, 1> prev_stance_ = Eigen::Matrix<double, 10, 1>::Zero();
-  Eigen::Vector2d prev_foot_ = Eigen::Vector2d::Zero();
-  double normal_force_ = 0.0;            // N, of the last step
-  ContactEvent event_;
-};
-
-/// A horizontal push on the COM (Section V-D disturbance rejection).
-struct Push {
-  double force_x = 0.0;   ///< N (F_b = -20, F_f = 25 in the paper)
-  double start = 0.0;     ///< s, simulation time
-  double duration = 0.0;  ///< s
+  Eigen::Vector2d foot = Eigen::Vector2d::Zero();  ///< foot centre at `time`, m
 };
 
 /// Settings of HopperSim.
 struct HopperSimSettings {
-  ContactDetectorSettings detector;  ///< contact hysteresis
+  ContactPhaseSettings contact;  ///< the contact-phase detector; default ContactPhaseSettings{}
 };
 
 /// The MuJoCo hopper: mjModel/mjData (owned), VSA states (beside MuJoCo, advanced by the exact
@@ -111,14 +72,16 @@ class HopperSim {
   explicit HopperSim(const std::string& mjcf_path,
                      const HopperSimSettings& settings = HopperSimSettings());
 
-  /// Sets a flight state (14): qpos/qvel and the VSA states; time = t; mode = flight.
+  /// Sets a flight state (14): qpos/qvel and the VSA states; time = t; mode = flight. The
+  /// detector starts as after an event at t (no phase change within its min_phase_time).
   void SetFlightState(const Eigen::Matrix<double, 14, 1>& x, double t = 0.0);
-  /// Sets a stance state (10) with the foot centre at (foot_x, 0); mode = stance.
+  /// Sets a stance state (10) with the foot centre at (foot_x, 0); mode = stance (as above).
   void SetStanceState(const Eigen::Matrix<double, 10, 1>& x, double foot_x, double t = 0.0);
 
-  /// One step: ctrl from u by WriteActuation, drag + active pushes into xfrc_applied, mj_step,
-  /// VSA advance with (u[2], u[3]) held, contact detection. Returns true on an event (appended to
-  /// events()). u = [tau0, F0, k0_hip, k0_leg]; bounds are NOT enforced here.
+  /// One step: mj_step1 (the collision pass of the current state), contact detection, ctrl from
+  /// u by WriteActuation, drag + active pushes into xfrc_applied, mj_step2, VSA advance with
+  /// (u[2], u[3]) held. Returns true on an event (appended to events()).
+  /// u = [tau0, F0, k0_hip, k0_leg]; bounds are NOT enforced here.
   bool Step(const Eigen::Vector4d& u);
 
   /// Current mode (hopper::kFlight or kStance) by the detector.
@@ -133,12 +96,13 @@ class HopperSim {
 
   void AddPush(const Push& push) { pushes_.push_back(push); }
   void ClearPushes() { pushes_.clear(); }
-  /// Sum of active push forces at time t.
-  double PushForce(double t) const;
+  /// Sum of active push forces at time t, N (ddoc::PushForce).
+  double PushForce(double t) const { return ddoc::PushForce(pushes_, t); }
 
   const std::vector<ContactEvent>& events() const { return events_; }
   void ClearEvents() { events_.clear(); }
-  double normal_force() const { return detector_.normal_force(); }
+  /// Sum of the foot-floor normal forces of the last step's constraint solve, N.
+  double normal_force() const { return FootNormalForce(map_, model_.get(), data_.get()); }
   const HopperActuation& actuation() const { return actuation_; }
 
   const mjModel* model() const { return model_.get(); }
@@ -159,6 +123,9 @@ class HopperSim {
   std::vector<Push> pushes_;
   std::vector<ContactEvent> events_;
   HopperActuation actuation_;
+  // Stance coordinates of the current state and of the previous step's state.
+  Eigen::Matrix<double, 10, 1> stance_now_ = Eigen::Matrix<double, 10, 1>::Zero();
+  Eigen::Matrix<double, 10, 1> stance_before_ = Eigen::Matrix<double, 10, 1>::Zero();
 };
 
 }  // namespace ddoc

@@ -1,15 +1,28 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
-// Wall time of a headless Algorithm 1 run of the MuJoCo hopper (controller plugin attached through
-// mjcb_control, learning every hop) against bare MuJoCo stepping of the same simulated duration,
-// both in this process. Target of issue 4: the run costs at most 3x the bare physics.
+// The controller plugin over a 100-hop Algorithm 1 run of the default scenario (10 kg drag-free
+// model, 8 kg MuJoCo robot with drag, 0.5 m/s):
+//   BM_ComputeAndOffline    the longest HopperController::Compute call (target <= 50 us at the
+//                           0.5 ms step), in wall time and in the thread's CPU time (wall time
+//                           includes preemption by other processes), and the offline part's
+//                           time per hop (RunOffline, host mode)
+//   BM_RunVersusBarePhysics the run's wall time against bare MuJoCo stepping of the same robot
+//                           for the same simulated time, both in one iteration, as a ratio
+//                           (target <= 1.2); /0 the host runs the offline part between steps,
+//                           /1 the controller's worker thread does
+//   BM_ControllerCreate     nominal gait + OC-FB solve on the model (once per run)
 //
 //   bench_hopper_run --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
+#include <time.h>
+
+#include <algorithm>
 #include <chrono>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "ddoc/mujoco/hopper_sim.h"
 #include "hopper_controller.h"
@@ -17,35 +30,79 @@
 namespace {
 
 using ddoc::plugin::HopperController;
+using Clock = std::chrono::steady_clock;
 
 constexpr int kHops = 100;
 constexpr double kMaxSeconds = 80.0;  // upper bound of simulated time per run
-const std::string kRobot = std::string(DDOC_SOURCE_DIR) + "/models/hopper_m8.xml";  // the default scenario's robot
+// The default scenario's robot.
+const std::string kRobot = std::string(DDOC_SOURCE_DIR) + "/models/hopper_m8.xml";
 
 struct Robot {
   ddoc::MjModelPtr model = ddoc::LoadMjcf(kRobot);
   ddoc::MjDataPtr data{mj_makeData(model.get())};
 };
 
-std::unique_ptr<HopperController> MakeController(const mjModel* m) {
-  ddoc::plugin::ControllerConfig config;  // inexact model: 10 kg, no drag (default scenario)
+std::unique_ptr<HopperController> MakeController(const mjModel* m, bool worker_thread) {
+  ddoc::plugin::ControllerConfig config;  // the default scenario: inexact 10 kg drag-free model
   config.gait.forward_speed = 0.5;
+  config.offline_thread = worker_thread;
   std::string error;
   auto c = HopperController::Create(m, config, &error);
   if (!c) throw std::runtime_error(error);
   return c;
 }
 
-// Steps until kHops hops (or kMaxSeconds, or the controller fails); returns simulated seconds.
-double RunLearning(Robot& r, HopperController& c) {
+// CPU time of the calling thread, us: unlike wall time it does not count the time the thread
+// was preempted (on a shared machine the scheduler's 4 ms tick shows up in single calls).
+double ThreadCpuUs() {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e6 * static_cast<double>(ts.tv_sec) + 1e-3 * static_cast<double>(ts.tv_nsec);
+}
+
+// Per-call timing of Compute through mjcb_control: wall and thread CPU time.
+HopperController* g_timed = nullptr;
+std::vector<double>* g_compute_us = nullptr;
+std::vector<double>* g_compute_cpu_us = nullptr;
+void TimedCallback(const mjModel* m, mjData* d) {
+  const double c0 = ThreadCpuUs();
+  const Clock::time_point t0 = Clock::now();
+  g_timed->Compute(m, d);
+  const Clock::time_point t1 = Clock::now();
+  g_compute_cpu_us->push_back(ThreadCpuUs() - c0);
+  g_compute_us->push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+}
+
+// The same per-call timing around a trivial callback (the VSA spring law with a constant input,
+// as in RunBare) over the same number of bare steps: the machine's noise floor of the maxima.
+const HopperController* g_trivial = nullptr;
+ddoc::VsaState g_trivial_vsa;
+void TimedTrivialCallback(const mjModel* m, mjData* d) {
+  const double c0 = ThreadCpuUs();
+  const Clock::time_point t0 = Clock::now();
+  ddoc::WriteActuation(g_trivial->mapping(), m, d, g_trivial_vsa, g_trivial->gait().u0.data());
+  const Clock::time_point t1 = Clock::now();
+  g_compute_cpu_us->push_back(ThreadCpuUs() - c0);
+  g_compute_us->push_back(std::chrono::duration<double, std::micro>(t1 - t0).count());
+}
+
+// Steps until kHops hops (or kMaxSeconds, or a failure) with the offline part run by the host
+// between steps (or by the worker thread). Returns simulated seconds. With `offline_ms`, the
+// time of every RunOffline call is recorded.
+double RunHops(Robot& r, HopperController& c, std::vector<double>* offline_ms) {
   c.Reset(r.model.get(), r.data.get());
-  ddoc::plugin::Attach(&c);
   const ddoc::HopperMapping& map = c.mapping();
   while (c.hop() < kHops && r.data->time < kMaxSeconds && !c.failed()) {
     ddoc::ApplyDragAndPush(map, r.model.get(), r.data.get(), 0.0);
     mj_step(r.model.get(), r.data.get());
+    if (!c.offline_pending()) continue;
+    const Clock::time_point t0 = Clock::now();
+    c.RunOffline();
+    if (offline_ms) {
+      offline_ms->push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    }
   }
-  ddoc::plugin::Detach();
+  c.FinishOffline();
   return r.data->time;
 }
 
@@ -64,28 +121,74 @@ void RunBare(Robot& r, const HopperController& c, double seconds) {
   }
 }
 
-void BM_Alg1HopperRun(benchmark::State& state) {
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<size_t>(q * static_cast<double>(v.size() - 1))];
+}
+
+void BM_ComputeAndOffline(benchmark::State& state) {
   Robot r;
-  auto c = MakeController(r.model.get());
+  auto c = MakeController(r.model.get(), false);
+  std::vector<double> compute_us, compute_cpu_us, offline_ms;
+  compute_us.reserve(200000);
+  compute_cpu_us.reserve(200000);
+  offline_ms.reserve(kHops);
   double sim = 0;
-  for (auto _ : state) sim = RunLearning(r, *c);
+  for (auto _ : state) {
+    compute_us.clear();
+    compute_cpu_us.clear();
+    offline_ms.clear();
+    g_timed = c.get();
+    g_compute_us = &compute_us;
+    g_compute_cpu_us = &compute_cpu_us;
+    mjcb_control = TimedCallback;
+    sim = RunHops(r, *c, &offline_ms);
+    mjcb_control = nullptr;
+  }
+  // Noise floor: the trivial callback over the same number of bare steps.
+  std::vector<double> trivial_us, trivial_cpu_us;
+  trivial_us.reserve(compute_us.size());
+  trivial_cpu_us.reserve(compute_us.size());
+  g_compute_us = &trivial_us;
+  g_compute_cpu_us = &trivial_cpu_us;
+  g_trivial = c.get();
+  ddoc::WriteFlightState(c->mapping(), c->gait().x0.data(), r.data.get(), &g_trivial_vsa);
+  mjcb_control = TimedTrivialCallback;
+  mj_resetData(r.model.get(), r.data.get());
+  ddoc::WriteFlightState(c->mapping(), c->gait().x0.data(), r.data.get(), &g_trivial_vsa);
+  while (trivial_us.size() < compute_us.size()) {
+    ddoc::ApplyDragAndPush(c->mapping(), r.model.get(), r.data.get(), 0.0);
+    mj_step(r.model.get(), r.data.get());
+  }
+  mjcb_control = nullptr;
+  state.counters["trivial_max_us"] = Quantile(trivial_us, 1.0);
+  state.counters["trivial_cpu_max_us"] = Quantile(trivial_cpu_us, 1.0);
+  state.counters["compute_max_us"] = Quantile(compute_us, 1.0);
+  state.counters["compute_p999_us"] = Quantile(compute_us, 0.999);
+  state.counters["compute_median_us"] = Quantile(compute_us, 0.5);
+  state.counters["compute_cpu_max_us"] = Quantile(compute_cpu_us, 1.0);
+  state.counters["offline_max_ms"] = Quantile(offline_ms, 1.0);
+  state.counters["offline_median_ms"] = Quantile(offline_ms, 0.5);
+  state.counters["calls"] = static_cast<double>(compute_us.size());
   state.counters["hops"] = c->hop();
   state.counters["sim_s"] = sim;
-  state.counters["fell_or_failed"] = c->hop() < kHops ? 1 : 0;
 }
-BENCHMARK(BM_Alg1HopperRun)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_ComputeAndOffline)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 // Both in one iteration, so the ratio comes from one moment of a noisy machine.
-void BM_Alg1VersusBarePhysics(benchmark::State& state) {
+void BM_RunVersusBarePhysics(benchmark::State& state) {
   Robot r;
-  auto c = MakeController(r.model.get());
+  auto c = MakeController(r.model.get(), state.range(0) == 1);
   double ratio = 0, run_s = 0, bare_s = 0, sim = 0;
   for (auto _ : state) {
-    auto t0 = std::chrono::steady_clock::now();
-    sim = RunLearning(r, *c);
-    auto t1 = std::chrono::steady_clock::now();
+    ddoc::plugin::Attach(c.get());
+    const Clock::time_point t0 = Clock::now();
+    sim = RunHops(r, *c, nullptr);
+    const Clock::time_point t1 = Clock::now();
+    ddoc::plugin::Detach();
     RunBare(r, *c, sim);
-    auto t2 = std::chrono::steady_clock::now();
+    const Clock::time_point t2 = Clock::now();
     run_s = std::chrono::duration<double>(t1 - t0).count();
     bare_s = std::chrono::duration<double>(t2 - t1).count();
     ratio = run_s / bare_s;
@@ -96,11 +199,11 @@ void BM_Alg1VersusBarePhysics(benchmark::State& state) {
   state.counters["sim_s"] = sim;
   state.counters["hops"] = c->hop();
 }
-BENCHMARK(BM_Alg1VersusBarePhysics)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_RunVersusBarePhysics)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_ControllerCreate(benchmark::State& state) {
   Robot r;
-  for (auto _ : state) benchmark::DoNotOptimize(MakeController(r.model.get()));
+  for (auto _ : state) benchmark::DoNotOptimize(MakeController(r.model.get(), false));
 }
 BENCHMARK(BM_ControllerCreate)->Unit(benchmark::kMillisecond)->Iterations(3);
 

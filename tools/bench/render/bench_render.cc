@@ -22,12 +22,12 @@
 //                        ddoc-hopper with and without --render.)
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <benchmark/benchmark.h>
 #include <mujoco/mujoco.h>
 #include <unistd.h>
@@ -243,14 +243,16 @@ BENCHMARK(BM_SimulateOneSecond)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Our own flag first; the rest goes to Google Benchmark.
-  std::vector<char*> rest;
-  for (int i = 0; i < argc; ++i) {
-    if (std::strncmp(argv[i], "--model=", 8) == 0) {
-      g_model_path = argv[i] + 8;
-    } else {
-      rest.push_back(argv[i]);
-    }
+  // Our own flag with CLI11; the rest goes to Google Benchmark.
+  CLI::App cli{"bench_render: the OSMesa renderer's frame rate and a recording simulation's "
+               "slowdown. Other flags (--benchmark_*) go to Google Benchmark."};
+  cli.allow_extras();
+  cli.add_option("--model", g_model_path,
+                 "MJCF to render (default models/hopper.xml; 'embedded': a capsule)");
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e);
   }
   if (g_model_path == "embedded") {
     g_model_path.clear();
@@ -260,6 +262,9 @@ int main(int argc, char** argv) {
   }
   std::printf("bench_render: model %s\n",
               g_model_path.empty() ? "(embedded capsule)" : g_model_path.c_str());
+  std::vector<std::string> extras = cli.remaining();
+  std::vector<char*> rest{argv[0]};
+  for (std::string& e : extras) rest.push_back(e.data());
   int rest_argc = static_cast<int>(rest.size());
   benchmark::Initialize(&rest_argc, rest.data());
   benchmark::RunSpecifiedBenchmarks();

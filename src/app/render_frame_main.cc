@@ -8,8 +8,9 @@
 //
 // The state shown is the model's initial state (qpos0, or keyframe 0 when the model has
 // one) after --time seconds of passive simulation (zero controls).
+#include <CLI/CLI.hpp>
+
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -21,60 +22,25 @@
 #include "ddoc/render/offscreen_renderer.h"
 #include "ddoc/render/png.h"
 
-namespace {
-
-int Usage(const char* error) {
-  if (error) std::cerr << "ddoc-render-frame: " << error << "\n";
-  std::cerr << "usage: ddoc-render-frame --model FILE.xml --out FILE.png [--width W] "
-               "[--height H] [--time T] [--body NAME] [--distance D] [--elevation DEG] "
-               "[--text METHOD]\n";
-  return 2;
-}
-
-bool ParseDouble(const std::string& text, double* value) {
-  char* end = nullptr;
-  *value = std::strtod(text.c_str(), &end);
-  return end && *end == '\0' && !text.empty();
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
   std::string model_path, out_path, text;
   double time = 0;
   ddoc::RenderSettings settings;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    if (flag == "-h" || flag == "--help") return Usage(nullptr), 0;
-    if (i + 1 >= argc) return Usage(("missing value after " + flag).c_str());
-    const std::string value = argv[++i];
-    double number = 0;
-    const bool numeric = ParseDouble(value, &number);
-    if (flag == "--model") {
-      model_path = value;
-    } else if (flag == "--out") {
-      out_path = value;
-    } else if (flag == "--body") {
-      settings.track_body = value;
-    } else if (flag == "--text") {
-      text = value;
-    } else if (!numeric) {
-      return Usage((flag + " needs a number, got '" + value + "'").c_str());
-    } else if (flag == "--width") {
-      settings.width = static_cast<int>(number);
-    } else if (flag == "--height") {
-      settings.height = static_cast<int>(number);
-    } else if (flag == "--time") {
-      time = number;
-    } else if (flag == "--distance") {
-      settings.camera_distance = number;
-    } else if (flag == "--elevation") {
-      settings.camera_elevation = number;
-    } else {
-      return Usage(("unknown option " + flag).c_str());
-    }
+  CLI::App cli{"ddoc-render-frame: one headless (OSMesa) frame of an MJCF model into a PNG"};
+  cli.add_option("--model", model_path, "MJCF file")->required();
+  cli.add_option("--out", out_path, "PNG file")->required();
+  cli.add_option("--width", settings.width, "pixels (default 640)");
+  cli.add_option("--height", settings.height, "pixels (default 480)");
+  cli.add_option("--time", time, "seconds of passive simulation first (default 0)");
+  cli.add_option("--body", settings.track_body, "body the camera tracks");
+  cli.add_option("--distance", settings.camera_distance, "camera distance, m");
+  cli.add_option("--elevation", settings.camera_elevation, "camera elevation, deg");
+  cli.add_option("--text", text, "method name of the overlay (none: no overlay)");
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return cli.exit(e) == 0 ? 0 : 2;
   }
-  if (model_path.empty() || out_path.empty()) return Usage("--model and --out are required");
 
   char load_error[1000] = "";
   std::unique_ptr<mjModel, void (*)(mjModel*)> m(

@@ -1,0 +1,72 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Learning on the hopper: the settings, the problem, mRL's prediction plant, the cost reference
+// and the initial law u^0 that the controller plugin and ddoc-hop-experiment share.
+#ifndef DDOC_HOPPER_HOPPER_LEARNING_H_
+#define DDOC_HOPPER_HOPPER_LEARNING_H_
+
+#include "ddoc/hopper/hopper_cost.h"
+#include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/nominal_gait.h"
+#include "ddoc/learner.h"
+#include "ddoc/plant.h"
+#include "ddoc/problem.h"
+#include "ddoc/trial_driver.h"
+
+namespace ddoc {
+
+/// Algorithm 1 on the hopper: the engine's default preset LearnerSettings{} with these overrides
+/// (why, with the measurements, in docs/hopper.md "Learner settings"): the paper's (36) with
+/// c = 1e-7, gamma = 0.5, plain backtracking and its step test; alpha_initial = 0.1, growing by
+/// 1/gamma after an accepted trial (kGrow); regularization_min = 0.01; RK4 pass with PSD
+/// switching Hessians; box_aware = false and time_curvature = false.
+LearnerSettings HopperLearnerSettings();
+
+/// The trial driver on the hopper: Algorithm 1, 3 warm-up hops (hop 0 starts on the model gait's
+/// state, not on the robot's own cycle), learner = HopperLearnerSettings().
+TrialDriverSettings HopperTrialSettings();
+
+/// Duration bounds of the hopper's modes (Bounds::duration_min/max), s.
+struct HopperModeDurations {
+  double flight_min = 0.05;  ///< s
+  double flight_max = 1.5;   ///< s
+  double stance_min = 0.05;  ///< s
+  double stance_max = 1.0;   ///< s
+};
+
+/// The problem of Section V on the analytic hopper: `model`, `cost` (42), the input bounds of
+/// Table I, the mode durations, and I4 through Problem::surface_weights = (w, 0). Both must
+/// outlive the problem. Throws InvalidArgument (Problem::Validate) on reversed durations.
+Problem HopperProblem(const HopperModel& model, const HopperCost& cost,
+                      const HopperModeDurations& durations = {});
+
+/// mRL's prediction plant on the hopper: `model` run from the measured start state with the
+/// flight leg-length rate rd set to 0 first. The model's massless leg has rd = 0 after takeoff and
+/// rdd = 0 in flight; MuJoCo's measured rd in flight is the oscillation of the 2 g foot on the
+/// leg spring (about 1 m/s at takeoff), which the model would read as a leg that keeps extending.
+class HopperPredictionPlant : public Plant {
+ public:
+  /// `model` must outlive this plant.
+  explicit HopperPredictionPlant(Plant* model) : model_(model) {}
+  void Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) override;
+
+ private:
+  Plant* model_;
+  Vector x0_;  // n_0: the projected start state
+};
+
+/// TrialDriver::CostReference for the hopper: before a trial's cost is evaluated, I1's x_ref is
+/// set to the trial's own start x(0) (the paper's (42)), or, for the costs the learner sees and
+/// when `anchor` is not empty, to `anchor` (e.g. the model gait's takeoff state, so that I1 also
+/// pulls the robot back to the gait; NOT the paper). `cost` must outlive the driver.
+TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector());
+
+/// u^0, T^0 of every method (Section V-C): Algorithm 1 run to convergence on the model itself
+/// (`model_plant` as both plants) from the gait's constant input u0 and durations T0; the OC-FB
+/// law is then learner.ConvergedPolicy(alpha). Sets the cost reference to the gait's x0 first.
+SolveResult SolveFromGait(Learner& learner, Plant& model_plant, HopperCost* cost,
+                          const NominalGait& gait);
+
+}  // namespace ddoc
+
+#endif  // DDOC_HOPPER_HOPPER_LEARNING_H_

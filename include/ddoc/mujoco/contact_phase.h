@@ -1,0 +1,65 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The one contact-phase detector of ddoc: flight / stance of the MJCF hopper from mjData.
+#ifndef DDOC_MUJOCO_CONTACT_PHASE_H_
+#define DDOC_MUJOCO_CONTACT_PHASE_H_
+
+#include <mujoco/mujoco.h>
+
+#include "ddoc/mujoco/hopper_mapping.h"
+
+namespace ddoc {
+
+/// Settings of ContactPhaseDetector.
+struct ContactPhaseSettings {
+  /// Touchdown: a foot-floor contact of the current collision pass with distance below this, m.
+  double touchdown_distance = 0.0;
+  /// Takeoff: the floor's vertical force on the robot (last constraint solve) below this, N.
+  double takeoff_force = 0.5;
+  /// No phase change within this time after the previous one (or after Reset), s.
+  double min_phase_time = 0.03;
+};
+
+/// What one Update found.
+enum class ContactChange { kNone, kTouchdown, kTakeoff };
+
+/// Flight / stance of the hopper, used by the plugin, HopperSim (and so ddoc-drop) and the tests.
+/// Update() must be called once per physics step where mjData holds the collision pass of the
+/// current state and still the constraint forces of the previous step: inside mjcb_control, or
+/// between mj_step1 and mj_step2. Then:
+///   - touchdown (flight -> stance): the current collision pass has a foot-floor contact closer
+///     than touchdown_distance. The current state is the last one before the impact, x^-(T1).
+///   - takeoff (stance -> flight): qfrc_constraint of the torso's vertical slide (the floor's
+///     vertical force on the robot, solved in the previous step) fell below takeoff_force. The
+///     current state is the first state of the flight.
+///   - min_phase_time after an event no new one: it rejects the one-step bounce MuJoCo shows at
+///     some impacts.
+/// Allocation-free.
+class ContactPhaseDetector {
+ public:
+  /// Throws InvalidArgument naming the field when a setting is not finite or
+  /// takeoff_force < 0 or min_phase_time < 0.
+  explicit ContactPhaseDetector(const ContactPhaseSettings& settings = {});
+
+  /// Starts in `mode` (hopper::kFlight or kStance) as if the last event had happened at `time`.
+  void Reset(int mode, double time);
+  /// Detects the phase of the current step at time d->time (see the class comment).
+  ContactChange Update(const HopperMapping& map, const mjData* d);
+
+  int mode() const { return mode_; }
+  double last_event_time() const { return last_event_; }
+  const ContactPhaseSettings& settings() const { return settings_; }
+
+ private:
+  ContactPhaseSettings settings_;
+  int mode_ = 0;              // hopper::kFlight / kStance
+  double last_event_ = -1e9;  // s
+};
+
+/// True when the current collision pass of d has a contact between the foot and the floor geoms
+/// with distance below `distance` (m).
+bool FootTouchesFloor(const HopperMapping& map, const mjData* d, double distance);
+
+}  // namespace ddoc
+
+#endif  // DDOC_MUJOCO_CONTACT_PHASE_H_

@@ -1,0 +1,139 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The trial driver: runs Algorithm 1, mRL or OC-FB over trials on a plant, episodic (every trial
+// from the same start) or online (each trial starts where the last one ended).
+#ifndef DDOC_TRIAL_DRIVER_H_
+#define DDOC_TRIAL_DRIVER_H_
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "ddoc/learner.h"
+#include "ddoc/plant.h"
+#include "ddoc/policy.h"
+#include "ddoc/problem.h"
+#include "ddoc/trajectory.h"
+
+namespace ddoc {
+
+/// The three methods of Section V; they differ only in where the trajectories of the learner
+/// come from.
+enum class Method {
+  kAlg1,  ///< Algorithm 1: direction (30) and line search (36) from the measured trial
+  kMrl,   ///< mRL: direction from the prediction plant's re-run of the law from the measured
+          ///< start; line search on the measured cost
+  kOcfb,  ///< OC-FB: the fallback law u^0 (a model-based optimum) every trial, no learning
+};
+
+/// Settings of TrialDriver.
+struct TrialDriverSettings {
+  Method method = Method::kAlg1;  ///< which of the three methods; default Algorithm 1
+  /// Trials run with the fallback law u^0 before learning starts, >= 1; the last of them is
+  /// Algorithm 1's "Initialize" trial (x^0, I^0). Default 1 = Algorithm 1 as printed.
+  int warmup_trials = 1;
+  LearnerSettings learner;  ///< Algorithm 1 (unused by kOcfb); default LearnerSettings{}
+};
+
+/// What the driver made of one completed trial.
+struct TrialOutcome {
+  int trial = 0;              ///< 0-based index of the trial
+  bool ran_fallback = false;  ///< the trial ran the fallback law u^0
+  bool learned = false;       ///< the learner saw the trial (Initialize or CompleteTrial)
+  /// (36) held. True for trials the line search does not judge: warm-up, "Initialize", OC-FB
+  /// and frozen trials.
+  bool accepted = false;
+  /// Measured cost: the learner's I of the trial when it learned, else EvaluateCost (inf for a
+  /// trial that could not be measured).
+  double cost = 0;
+  LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the trial
+};
+
+/// Runs the trials of one of the three methods (Section V) with one engine, whatever the plant.
+///
+/// It owns the Learner (and with it the step-size state alpha), the warm-up trials, the
+/// fallback law u^0 and freezing. The law it hands out for the next trial is:
+///   - u^0 (the `fallback` given at construction) for the warm-up trials, for every OC-FB trial,
+///     and after the learner terminated (alpha < alpha_min) before any trial passed (36):
+///     u^0 is the law that produced x^0, i.e. Algorithm 1's "control law of the previous
+///     accepted iteration" for i = 0 (Learner::NextTrial would replay x^0's inputs instead);
+///   - otherwise Learner::NextTrial(): (31) and the law (33)-(34) around the nominal.
+/// After Freeze() every trial runs the law of the trial that ran when Freeze() was called.
+///
+/// Trials follow one another on a plant that is not reset (online learning: each trial starts
+/// where the last ended; the feedback of (34) absorbs the start deviation) or over resets
+/// (episodic). What is plant-specific is given by the caller: mRL's prediction plant, and
+/// `reference`, called before any cost of a trial is evaluated (for costs whose reference
+/// depends on the trial, e.g. the hopper's I1 measured against the trial's own start).
+///
+/// One object, one thread: CompleteTrial (the offline part: (36), (30), (31)) may run on a
+/// worker thread while the caller steps another policy; the caller must not step law() or the
+/// fallback meanwhile (CompleteTrial re-loads the learner's laws and, for mRL, runs u^0 on the
+/// prediction plant).
+class TrialDriver {
+ public:
+  /// Called with the trial before its cost is evaluated; for_learner is true when the cost
+  /// goes to the learner ((36), (30)), false when it is only reported.
+  using CostReference = std::function<void(const Trajectory& trial, bool for_learner)>;
+  /// The start state of the next online trial from the measured trial.
+  using NextStart = std::function<Vector(const Trajectory& trial)>;
+
+  /// Validates the settings (InvalidArgument naming the field: warmup_trials < 1, kMrl without
+  /// a prediction plant, the learner's settings) and starts at trial 0 with u^0. `problem`,
+  /// `fallback` and `prediction` must outlive the driver.
+  TrialDriver(const Problem& problem, const TrialDriverSettings& settings, Policy& fallback,
+              Plant* prediction = nullptr, CostReference reference = nullptr);
+
+  /// Restarts from trial 0 with u^0 and a fresh learner; unfreezes. Allocates.
+  void Reset();
+
+  /// The law of the current trial.
+  Policy& law() { return *law_; }
+  /// The law of the current trial when it is one the learner made, else null (u^0).
+  OnlineController* learned_law() { return learned_; }
+  bool runs_fallback() const { return learned_ == nullptr; }
+  /// 0-based index of the current trial.
+  int trial() const { return trial_; }
+  /// True when completing the current trial runs the learner (and so changes law()): not
+  /// OC-FB, not frozen, the warm-up is over or ends with this trial.
+  bool CompletionLearns() const;
+
+  /// Ends the current trial with its measurement: the offline part for the next trial (cost,
+  /// (36) and backtracking, (30) on an accepted trial, (31) and the next law). Allocates.
+  TrialOutcome CompleteTrial(const Trajectory& measured);
+
+  /// From now on every trial runs the current law; CompleteTrial only reports. Reset() undoes it.
+  void Freeze() { frozen_ = true; }
+  bool frozen() const { return frozen_; }
+
+  /// One trial on a plant from x0: runs law() (the plant calls BeginTrial), then CompleteTrial.
+  /// The measured trajectory is returned in *measured.
+  TrialOutcome RunTrial(Plant& plant, const ConstVectorRef& x0, Trajectory* measured);
+  /// `trials` trials on a plant: every one from x0 (episodic, next_start empty), or trial 0
+  /// from x0 and trial i+1 from next_start(trial i) (online).
+  std::vector<TrialOutcome> Run(Plant& plant, const ConstVectorRef& x0, int trials,
+                                const NextStart& next_start = nullptr);
+
+  /// The learner (null for OC-FB).
+  const Learner* learner() const { return learner_.get(); }
+  const TrialDriverSettings& settings() const { return settings_; }
+
+ private:
+  void UseFallback();
+  void UseLearnedLaw(OnlineController& law);
+
+  const Problem* problem_;
+  TrialDriverSettings settings_;
+  Policy* fallback_;
+  Plant* prediction_;
+  CostReference reference_;
+  std::unique_ptr<Learner> learner_;  // null for OC-FB
+  Policy* law_ = nullptr;             // the law of the current trial
+  OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
+  int trial_ = 0;
+  bool frozen_ = false;
+};
+
+}  // namespace ddoc
+
+#endif  // DDOC_TRIAL_DRIVER_H_

@@ -1,0 +1,44 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// What one hop (one trial) did on the robot: the one hop report type, written to the logs as is.
+#ifndef DDOC_PLUGIN_HOP_REPORT_H_
+#define DDOC_PLUGIN_HOP_REPORT_H_
+
+#include <Eigen/Core>
+
+#include "ddoc/hopper/hopper_cost.h"
+#include "ddoc/learner.h"
+
+namespace ddoc::plugin {
+
+/// One hop, measured on the robot, and what the learner made of it.
+struct HopReport {
+  int hop = 0;                  ///< 0-based
+  double t_start = 0.0;         ///< takeoff time that started the hop, s
+  double t_touchdown = 0.0;     ///< s
+  double t_end = 0.0;           ///< time of the hop's last stance sample, s
+  HopperCostTerms terms;        ///< I1..I4 of (42), I1 against the hop's own start
+  double cost = 0.0;            ///< I1 + I2 + I3 + I4
+  double t1 = 0.0;              ///< flight duration, s
+  double t2 = 0.0;              ///< period, s
+  double step_length = 0.0;     ///< touchdown foot x minus the previous touchdown foot x, m
+  double speed = 0.0;           ///< (x_end - x_start) / t2, m/s
+  double apex = 0.0;            ///< max COM height during flight, m
+  double foot_height_td = 0.0;  ///< foot height at touchdown (the I4 surface), m
+  double alpha = 0.0;           ///< line-search parameter of the law that ended the hop
+  double du2 = 0.0;             ///< int |du|^2 dtau of that law over the hop
+  double dt2 = 0.0;             ///< |dT|^2 of that law (planned vs nominal)
+  int nonfinite = 0;            ///< steps with a non-finite measured state in this hop
+  /// COM (x, y, xd, yd), world frame, at touchdown (the last pre-impact state) and at the
+  /// takeoff that ends the hop (the first flight state).
+  Eigen::Vector4d body_touchdown = Eigen::Vector4d::Zero();
+  Eigen::Vector4d body_takeoff = Eigen::Vector4d::Zero();
+  // From the trial driver (TrialOutcome):
+  bool accepted = false;        ///< (36) held (true for trials it does not judge)
+  double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)
+  LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the hop
+};
+
+}  // namespace ddoc::plugin
+
+#endif  // DDOC_PLUGIN_HOP_REPORT_H_

@@ -1,0 +1,194 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "hopper_run.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+namespace ddoc::app {
+
+int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const RunError& e) {
+    std::fprintf(stderr, "%s: %s\n", tool, e.what());
+    return e.code();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: internal error: %s\n", tool, e.what());
+    return kExitError;
+  }
+}
+
+std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
+                       double phase_time) {
+  char buf[160];
+  if (!x.allFinite()) return "the measured state is not finite";
+  if (x(hopper::kY) < lim.min_height) {
+    std::snprintf(buf, sizeof(buf), "body height %.3f m below %.2f m", x(hopper::kY),
+                  lim.min_height);
+    return buf;
+  }
+  if (std::abs(x(hopper::kPhi)) > lim.max_pitch) {
+    std::snprintf(buf, sizeof(buf), "body pitch %.2f rad beyond +-%.2f rad", x(hopper::kPhi),
+                  lim.max_pitch);
+    return buf;
+  }
+  if (std::abs(x(hopper::kTheta)) > lim.max_leg_angle) {
+    std::snprintf(buf, sizeof(buf), "leg angle %.2f rad beyond +-%.2f rad", x(hopper::kTheta),
+                  lim.max_leg_angle);
+    return buf;
+  }
+  if (phase_time > lim.max_phase) {
+    std::snprintf(buf, sizeof(buf), "no touchdown or takeoff for %.1f s (stalled)", phase_time);
+    return buf;
+  }
+  return "";
+}
+
+HopperParams ModelParams(const Scenario& s) {
+  HopperParams p;
+  if (!s.model_mjcf.empty()) p = LoadHopperParamsFromMjcf(s.model_mjcf);
+  const ModelNumbers& n = s.model_numbers;
+  if (n.mass) p.M = *n.mass;
+  if (n.j_body) p.J_body = *n.j_body;
+  if (n.j_leg) p.J_leg = *n.j_leg;
+  if (n.r0) p.r0 = *n.r0;
+  if (n.drag) p.c_d = *n.drag;
+  if (n.beta) p.beta = *n.beta;
+  if (n.gravity) p.g = *n.gravity;
+  p.Validate();
+  return p;
+}
+
+plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model) {
+  plugin::ControllerConfig config;
+  config.driver.method = s.method;
+  config.model = model;
+  config.gait.forward_speed = s.forward_speed;
+  if (s.gait_k0_hip) config.gait.k0_hip = *s.gait_k0_hip;
+  if (s.gait_k0_leg) config.gait.k0_leg = *s.gait_k0_leg;
+  const LearningOverrides& l = s.learning;
+  LearnerSettings& learner = config.driver.learner;
+  if (l.c) learner.c = *l.c;
+  if (l.gamma) learner.gamma = *l.gamma;
+  if (l.epsilon) learner.epsilon = *l.epsilon;
+  if (l.delta_i) learner.delta_i = *l.delta_i;
+  if (l.initial_hops) config.driver.warmup_trials = *l.initial_hops;
+  if (l.alpha_min) learner.alpha_min = *l.alpha_min;
+  if (l.max_duration_step) learner.switching.max_duration_step = *l.max_duration_step;
+  if (l.reset_alpha_on_accept) {
+    learner.alpha_after_accept =
+        *l.reset_alpha_on_accept ? AlphaAfterAccept::kReset : AlphaAfterAccept::kGrow;
+  }
+  if (l.alpha_initial) learner.alpha_initial = *l.alpha_initial;
+  // The regularization mu, the cyclic value and the terminal condition apply to both learners
+  // (the model solve of u^0 and the robot's); mu is the floor of the one regularization of the
+  // online QP (33) and the Riccati pass.
+  for (LearnerSettings* ls : {&learner, &config.model_learner}) {
+    if (l.regularization) ls->regularization_min = *l.regularization;
+    if (l.cyclic_value) ls->backward.cyclic_value = *l.cyclic_value;
+    if (l.terminal_event) ls->backward.terminal_event = *l.terminal_event;
+  }
+  if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
+  const ExperimentOverrides& x = s.experiment;
+  if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
+  if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;
+  return config;
+}
+
+void RunOverrides::Register(CLI::App* cli, bool full) {
+  cli->add_option("--method,-m", method, "alg1 | ocfb | mrl (overrides the scenario)");
+  cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
+  cli->add_option("--offline-latency", offline_latency,
+                  "simulated s from a hop's end until the law learned from it takes effect "
+                  "(default 0.02; 0: learn inside the control callback, synchronously)");
+  if (!full) return;
+  cli->add_option("--hops", hops, "number of hops (overrides the scenario)");
+  cli->add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
+  cli->add_option("--robot", robot, "robot MJCF (overrides the scenario)");
+  cli->add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
+  cli->add_option("--push", pushes, "extra push TIME,FORCE,DURATION (s, N, s; repeatable)");
+}
+
+namespace {
+
+// The scenario file with the command-line overrides applied and validated.
+Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
+  Scenario s = LoadScenario(path);
+  if (!o.method.empty()) s.method = ParseMethod(o.method);
+  if (o.hops && *o.hops < 0) {
+    throw ScenarioError("--hops must be >= 0, got " + std::to_string(*o.hops));
+  }
+  if (o.seconds && !(*o.seconds >= 0)) throw ScenarioError("--seconds must be >= 0");
+  if (o.hops) s.hops = *o.hops;
+  if (o.seconds) s.seconds = *o.seconds;
+  if (o.hops && !o.seconds) s.seconds = 0;
+  if (o.seconds && !o.hops) s.hops = 0;
+  if (!o.robot.empty()) s.robot_mjcf = o.robot;
+  if (!o.model_mjcf.empty()) s.model_mjcf = o.model_mjcf;
+  if (o.no_pushes) s.pushes.clear();
+  for (const std::string& p : o.pushes) s.pushes.push_back(ParsePush(p));
+  ValidateScenario(s);
+  return s;
+}
+
+}  // namespace
+
+LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides) {
+  LoadedRun run;
+  HopperParams params;
+  try {
+    run.scenario = ScenarioWithOverrides(scenario_path, overrides);
+    run.model = LoadMjcf(run.scenario.robot_mjcf);
+    HopperMapping::Build(run.model.get(), run.scenario.robot_mjcf);  // errors name the file
+    params = ModelParams(run.scenario);
+  } catch (const std::exception& e) {
+    throw RunError(kExitBadInput, e.what());
+  }
+  run.config = ControllerConfigFor(run.scenario, params);
+  if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
+  run.data.reset(mj_makeData(run.model.get()));
+  std::string error;
+  run.controller = plugin::HopperController::Create(run.model.get(), run.config, &error);
+  if (!run.controller) {
+    // A bad --offline-latency is bad input; anything else failed inside the controller.
+    const bool input = error.find("offline_latency") != std::string::npos;
+    throw RunError(input ? kExitBadInput : kExitError, error);
+  }
+  run.controller->Reset(run.model.get(), run.data.get());
+  return run;
+}
+
+RunStepper::RunStepper(LoadedRun* run) : run_(run) {
+  plugin::Attach(run->controller.get());
+  Restarted();
+}
+
+RunStepper::~RunStepper() { plugin::Detach(); }
+
+void RunStepper::Restarted() {
+  phase_start_ = run_->data->time;
+  mode_ = run_->controller->mode();
+}
+
+StepOutcome RunStepper::Step() {
+  const mjModel* m = run_->model.get();
+  mjData* d = run_->data.get();
+  plugin::HopperController& c = *run_->controller;
+  push_ = pushes_ ? PushForce(run_->scenario.pushes, d->time) : 0.0;
+  ApplyDragAndPush(c.mapping(), m, d, push_);
+  mj_step(m, d);
+  if (c.offline_pending()) c.RunOffline();  // between steps, outside mjcb_control
+  if (c.failed()) return {StepOutcome::Kind::kFailed, c.error()};
+  x_ = FlightState(c.mapping(), d, c.vsa());
+  if (c.mode() != mode_) {
+    mode_ = c.mode();
+    phase_start_ = d->time;
+  }
+  const std::string fall = FallReason(limits_, x_, d->time - phase_start_);
+  if (!fall.empty()) return {StepOutcome::Kind::kFell, fall};
+  return {};
+}
+
+}  // namespace ddoc::app

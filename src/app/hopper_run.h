@@ -1,0 +1,134 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// What ddoc-hopper and ddoc-return-map share: loading a run (scenario, command-line overrides,
+// robot, model, controller) and stepping it (drag, pushes, the offline part, the fall limits).
+#ifndef DDOC_APP_HOPPER_RUN_H_
+#define DDOC_APP_HOPPER_RUN_H_
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ddoc/mujoco/hopper_sim.h"
+#include "hopper_controller.h"
+#include "scenario.h"
+
+namespace CLI {
+class App;
+}  // namespace CLI
+
+namespace ddoc::app {
+
+/// Exit codes of the hopper tools.
+constexpr int kExitOk = 0;
+constexpr int kExitError = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitFall = 3;
+
+/// An error that ends a tool with `code` (kExitBadInput or kExitError); the message names it.
+class RunError : public std::runtime_error {
+ public:
+  RunError(int code, const std::string& what) : std::runtime_error(what), code_(code) {}
+  int code() const { return code_; }
+
+ private:
+  int code_;
+};
+
+/// The body of the tools' main(): runs `run`; a RunError escaping it is printed as
+/// "<tool>: <message>" and ends with its code, any other exception as "<tool>: internal error:
+/// <message>" with kExitError.
+int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv);
+
+/// Fall limits: the run ends with exit code 3 when one holds.
+struct FallLimits {
+  double min_height = 0.3;     ///< COM height y below this, m (the leg is 0.7 m long)
+  double max_pitch = 1.0;      ///< |phi| above this, rad (57 deg)
+  double max_leg_angle = 1.2;  ///< |theta| above this, rad (69 deg): the leg nearly horizontal
+  double max_phase = 3.0;      ///< a flight or stance phase longer than this, s (stalled)
+};
+
+/// Returns a non-empty reason when the robot has fallen.
+std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
+                       double phase_time);
+
+/// The analytic model of a scenario: its model MJCF (if any), then the numbers on top.
+HopperParams ModelParams(const Scenario& s);
+
+/// The controller configuration of a scenario: method, model, gait, <learning>, <experiment>.
+plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model);
+
+/// Command-line overrides of a scenario (unset: the scenario's value).
+struct RunOverrides {
+  std::string method;                    ///< --method alg1 | ocfb | mrl
+  std::optional<int> hops;               ///< --hops N (alone: no seconds limit)
+  std::optional<double> seconds;         ///< --seconds S (alone: no hops limit)
+  std::string robot;                     ///< --robot MJCF
+  std::string model_mjcf;                ///< --model-mjcf MJCF
+  std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
+  bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
+  std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
+
+  /// Registers the flags shared by ddoc-hopper and ddoc-return-map on `cli`; `full` adds those
+  /// only ddoc-hopper takes (--hops, --seconds, --robot, --model-mjcf, --push).
+  void Register(CLI::App* cli, bool full);
+};
+
+/// A scenario loaded and ready to step.
+struct LoadedRun {
+  Scenario scenario;
+  plugin::ControllerConfig config;
+  MjModelPtr model;
+  MjDataPtr data;
+  std::unique_ptr<plugin::HopperController> controller;  ///< created and Reset
+};
+
+/// The load-a-run step: the scenario with the overrides, validated; the robot MJCF; the model's
+/// parameters; the controller (Create + Reset). Throws RunError: kExitBadInput for bad input
+/// (the message names the file, flag or element), kExitError when the controller cannot be
+/// created.
+LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides);
+
+/// What one step of a run ended with.
+struct StepOutcome {
+  enum class Kind { kOk, kFailed, kFell };
+  Kind kind = Kind::kOk;
+  std::string reason;  ///< the controller's error, or why the robot fell
+};
+
+/// Steps a loaded run: drag and the active pushes into xfrc_applied, mj_step (the controller runs
+/// in mjcb_control), the offline part between steps (RunOffline), the fall limits. Attaches the
+/// controller for its lifetime.
+class RunStepper {
+ public:
+  explicit RunStepper(LoadedRun* run);
+  ~RunStepper();
+  RunStepper(const RunStepper&) = delete;
+  RunStepper& operator=(const RunStepper&) = delete;
+
+  StepOutcome Step();
+  /// After HopperController::RestartHop: the phase clock of the fall limits restarts.
+  void Restarted();
+  /// Pushes act (default) or not.
+  void set_pushes(bool on) { pushes_ = on; }
+  double push() const { return push_; }  ///< the push force of the last step, N
+  /// Flight coordinates of the state after the last step.
+  const Eigen::Matrix<double, 14, 1>& state() const { return x_; }
+
+ private:
+  LoadedRun* run_;
+  FallLimits limits_;
+  bool pushes_ = true;
+  double push_ = 0.0;
+  int mode_ = hopper::kFlight;
+  double phase_start_ = 0.0;
+  Eigen::Matrix<double, 14, 1> x_ = Eigen::Matrix<double, 14, 1>::Zero();
+};
+
+}  // namespace ddoc::app
+
+#endif  // DDOC_APP_HOPPER_RUN_H_

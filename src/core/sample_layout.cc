@@ -1,0 +1,55 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/sample_layout.h"
+
+#include <sstream>
+#include <string>
+
+namespace ddoc {
+
+void SampleLayout::Allocate(const SwitchedSystem& system, int max_samples, const char* who) {
+  if (max_samples < 2) {
+    throw InvalidArgument(std::string(who) + ": max_samples = " + std::to_string(max_samples) +
+                          ", expected >= 2");
+  }
+  const int K = system.num_modes();
+  dims_.resize(K);
+  for (int k = 0; k < K; ++k) dims_[k] = system.state_dim(k);
+  counts_.assign(K, 0);
+  offsets_.assign(K, 0);
+  m_ = system.input_dim();
+  total_ = 0;
+  max_samples_ = max_samples;
+}
+
+int SampleLayout::Assign(const Trajectory& trajectory, const char* who) {
+  const int K = num_modes();
+  if (trajectory.num_modes() != K) {
+    throw InvalidArgument(std::string(who) + ": trajectory has " +
+                          std::to_string(trajectory.num_modes()) + " modes, expected K = " +
+                          std::to_string(K));
+  }
+  int total = 0;
+  for (int k = 0; k < K; ++k) {
+    const ModeTrajectory& mode = trajectory.modes[k];
+    const int N = mode.num_samples();
+    if (N < 2 || mode.x.rows() != dims_[k] || mode.x.cols() != N || mode.u.rows() != m_ ||
+        mode.u.cols() != N) {
+      std::ostringstream os;
+      os << who << ": mode " << k << " has " << N << " samples, x " << mode.x.rows() << "x"
+         << mode.x.cols() << ", u " << mode.u.rows() << "x" << mode.u.cols()
+         << "; expected >= 2 samples, x n_k = " << dims_[k] << " rows, u m = " << m_ << " rows";
+      throw InvalidArgument(os.str());
+    }
+    offsets_[k] = total;
+    counts_[k] = N;
+    total += N;
+  }
+  if (total > max_samples_) {
+    throw InvalidArgument(std::string(who) + ": trajectory has " + std::to_string(total) +
+                          " samples, more than max_samples = " + std::to_string(max_samples_));
+  }
+  total_ = total;
+  return total;
+}
+
+}  // namespace ddoc

@@ -1,0 +1,69 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/hopper/hopper_learning.h"
+
+#include "ddoc/policy.h"
+
+namespace ddoc {
+
+LearnerSettings HopperLearnerSettings() {
+  LearnerSettings s;  // the default preset (kRiccati, alpha on the feed-forward only), then:
+  s.acceptance = Acceptance::kSufficientDecrease;
+  s.interpolate_backtracking = false;
+  s.step_convergence = true;
+  s.c = 1e-7;
+  s.gamma = 0.5;
+  s.alpha_after_accept = AlphaAfterAccept::kGrow;
+  s.regularization_min = 0.01;
+  s.backward.integrator = BackwardIntegrator::kRk4;
+  s.backward.psd_switching_hessians = true;
+  s.backward.box_aware = false;
+  s.backward.time_curvature = false;
+  s.alpha_initial = 0.1;
+  return s;
+}
+
+TrialDriverSettings HopperTrialSettings() {
+  TrialDriverSettings s;
+  s.method = Method::kAlg1;
+  s.warmup_trials = 3;
+  s.learner = HopperLearnerSettings();
+  return s;
+}
+
+Problem HopperProblem(const HopperModel& model, const HopperCost& cost,
+                      const HopperModeDurations& d) {
+  Problem p;
+  p.system = &model;
+  p.cost = &cost;
+  p.bounds.u_min = hopper::InputLowerBound();
+  p.bounds.u_max = hopper::InputUpperBound();
+  p.bounds.duration_min = Eigen::Vector2d(d.flight_min, d.stance_min);
+  p.bounds.duration_max = Eigen::Vector2d(d.flight_max, d.stance_max);
+  p.surface_weights = Eigen::Vector2d(cost.weights().surface_weight, 0.0);
+  p.Validate();
+  return p;
+}
+
+void HopperPredictionPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) {
+  x0_ = x0;
+  if (x0_.size() == hopper::kFlightDim) x0_(hopper::kRd) = 0.0;
+  model_->Run(x0_, policy, out);
+}
+
+TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor) {
+  return [cost, anchor](const Trajectory& trial, bool for_learner) {
+    cost->SetReference(for_learner && anchor.size() > 0 ? anchor : trial.x0);
+  };
+}
+
+SolveResult SolveFromGait(Learner& learner, Plant& model_plant, HopperCost* cost,
+                          const NominalGait& gait) {
+  cost->SetReference(gait.x0);
+  const Eigen::Vector2d durations(gait.T0(0), gait.T0(1) - gait.T0(0));
+  const Eigen::Vector4d u0 = gait.u0;
+  FunctionPolicy initial(durations,
+                         [u0](int, double, const ConstVectorRef&, VectorRef u) { u = u0; });
+  return learner.Solve(model_plant, model_plant, gait.x0, initial);
+}
+
+}  // namespace ddoc

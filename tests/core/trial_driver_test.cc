@@ -1,0 +1,261 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// TrialDriver on ModelPlant with known answers: episodic Algorithm 1 and mRL follow
+// Learner::Solve trial for trial, the three methods agree with an exact model, online trials
+// start where the last one ended, and warm-up, the fallback law, freezing and bad settings
+// behave as documented.
+#include "ddoc/trial_driver.h"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ddoc/cost.h"
+#include "test_util.h"
+#include "two_mode_lq.h"
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+TrialDriverSettings DriverSettings(Method method) {
+  TrialDriverSettings s;
+  s.method = method;
+  s.learner = LqTestSettings();
+  return s;
+}
+
+// u^0 = 0.3 with planned durations (1, 1): an initial law whose trial depends on the input
+// gain, so that the model's prediction differs from the plant's measurement.
+FunctionPolicy ConstantInputPolicy() {
+  return FunctionPolicy(Eigen::Vector2d(1.0, 1.0), [](int, double, const ConstVectorRef&,
+                                                       VectorRef u) { u.setConstant(0.3); });
+}
+
+// Costs of the accepted nominals, the initial one first, as Learner::Solve reports them.
+std::vector<double> AcceptedCosts(const std::vector<TrialOutcome>& outcomes) {
+  std::vector<double> costs;
+  for (const TrialOutcome& o : outcomes) {
+    if (o.learned && o.accepted) costs.push_back(o.cost);
+  }
+  return costs;
+}
+
+// The exact two-mode LQ problem, its plant and u^0 = 0 as the fallback law.
+class TrialDriverTest : public ::testing::Test {
+ protected:
+  TwoModeLq lq;
+  LqProblem p{lq};
+  ModelPlant plant{p.problem};
+  FunctionPolicy fallback = ZeroInputPolicy();
+};
+
+// Algorithm 1 (real, real) and mRL (model, real) by Learner::Solve and by the episodic driver
+// (warm-up 1, fallback = Solve's initial policy) on an inexact plant: the same trials in the
+// same order, so the same accepted costs and the same final nominal, bit for bit.
+class TrialDriverVersusSolve : public ::testing::TestWithParam<Method> {};
+
+TEST_P(TrialDriverVersusSolve, EpisodicRunFollowsSolveTrialForTrial) {
+  TwoModeLq model_lq, true_lq;
+  true_lq.b_scale = 1.6;
+  LqProblem model(model_lq), truth(true_lq);
+  ModelPlant model_plant(model.problem);
+  ModelPlant real_plant(truth.sys, model.problem.bounds);
+  const bool mrl = GetParam() == Method::kMrl;
+
+  FunctionPolicy initial = ConstantInputPolicy();
+  Learner learner(model.problem, LqTestSettings());
+  const SolveResult solved =
+      learner.Solve(mrl ? model_plant : real_plant, real_plant, model_lq.x0, initial);
+  ASSERT_GT(solved.iterations, 5);
+
+  FunctionPolicy fallback = ConstantInputPolicy();
+  TrialDriver driver(model.problem, DriverSettings(GetParam()), fallback,
+                     mrl ? &model_plant : nullptr);
+  const std::vector<TrialOutcome> outcomes =
+      driver.Run(real_plant, model_lq.x0, solved.trials + 1);
+  EXPECT_EQ(AcceptedCosts(outcomes), solved.cost_history);
+  EXPECT_EQ(driver.learner()->nominal().T, solved.T);
+  EXPECT_EQ(driver.learner()->status(), solved.status);
+  EXPECT_EQ(driver.learner()->iteration(), solved.iterations);
+  EXPECT_TRUE(outcomes[0].ran_fallback);
+  EXPECT_FALSE(outcomes[1].ran_fallback);
+}
+
+INSTANTIATE_TEST_SUITE_P(Alg1AndMrl, TrialDriverVersusSolve,
+                         ::testing::Values(Method::kAlg1, Method::kMrl));
+
+TEST(TrialDriver, AllThreeMethodsAgreeWithAnExactModel) {
+  // u^0 is the OC-FB law of a model solve. With an exact model the plant measures what the model
+  // predicts, so OC-FB's trial cost is the model optimum, and Algorithm 1 and mRL, started from
+  // that law, stay at it.
+  TwoModeLq lq;
+  LqProblem model(lq), truth(lq);
+  ModelPlant model_plant(model.problem);
+  ModelPlant real_plant(truth.sys, model.problem.bounds);
+  FunctionPolicy initial = ZeroInputPolicy();
+  Learner ocfb(model.problem, LqTestSettings());
+  const SolveResult solved = ocfb.Solve(model_plant, model_plant, lq.x0, initial);
+  ASSERT_EQ(solved.status, LearnerStatus::kConverged);
+  OnlineController& u0 = ocfb.ConvergedPolicy();
+
+  std::vector<double> last;
+  for (Method method : {Method::kAlg1, Method::kMrl, Method::kOcfb}) {
+    TrialDriver driver(model.problem, DriverSettings(method), u0, &model_plant);
+    const std::vector<TrialOutcome> outcomes = driver.Run(real_plant, lq.x0, 6);
+    for (const TrialOutcome& o : outcomes) {
+      EXPECT_NEAR(o.cost, solved.cost, 1e-6 * solved.cost) << "trial " << o.trial;
+    }
+    last.push_back(outcomes.back().cost);
+    EXPECT_EQ(driver.learner() == nullptr, method == Method::kOcfb);
+  }
+  EXPECT_NEAR(last[0], last[2], 1e-6 * last[2]);
+  EXPECT_NEAR(last[1], last[2], 1e-6 * last[2]);
+}
+
+TEST_F(TrialDriverTest, OnlineTrialsStartWhereTheLastOneEnded) {
+  // Identity reset: the next trial starts at the last measured state.
+  std::vector<Vector> ends;
+  const TrialDriver::NextStart next = [&ends](const Trajectory& t) {
+    ends.push_back(t.modes.back().x.rightCols(1));
+    return ends.back();
+  };
+  TrialDriver driver(p.problem, DriverSettings(Method::kAlg1), fallback);
+  Trajectory measured;
+  std::vector<Vector> starts;
+  Vector x = lq.x0;
+  for (int i = 0; i < 5; ++i) {
+    driver.RunTrial(plant, x, &measured);
+    starts.push_back(measured.x0);
+    x = next(measured);
+  }
+  EXPECT_EQ(starts[0], lq.x0);
+  for (int i = 1; i < 5; ++i) EXPECT_EQ(starts[i], ends[static_cast<size_t>(i - 1)]);
+
+  // Run(..., next_start) is the same loop.
+  TrialDriver again(p.problem, DriverSettings(Method::kAlg1), fallback);
+  ends.clear();
+  const std::vector<TrialOutcome> outcomes = again.Run(plant, lq.x0, 5, next);
+  ASSERT_EQ(outcomes.size(), 5u);
+  EXPECT_EQ(again.learner()->nominal_cost(), driver.learner()->nominal_cost());
+  EXPECT_EQ(again.learner()->nominal().x0, driver.learner()->nominal().x0);
+  // An online run with next_start = x0 is the episodic run.
+  TrialDriver online(p.problem, DriverSettings(Method::kAlg1), fallback);
+  TrialDriver episodic(p.problem, DriverSettings(Method::kAlg1), fallback);
+  const Vector x0 = lq.x0;
+  const auto a = online.Run(plant, x0, 8, [&x0](const Trajectory&) { return x0; });
+  const auto b = episodic.Run(plant, x0, 8);
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].cost, b[i].cost) << "trial " << i;
+}
+
+TEST_F(TrialDriverTest, WarmupTrialsRunTheFallbackAndTheLastOneInitializes) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.warmup_trials = 3;
+  std::vector<bool> for_learner;
+  TrialDriver driver(p.problem, settings, fallback, nullptr,
+                     [&for_learner](const Trajectory&, bool learns) {
+                       for_learner.push_back(learns);
+                     });
+  Trajectory measured;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_TRUE(driver.runs_fallback());
+    EXPECT_EQ(&driver.law(), &fallback);
+    EXPECT_EQ(driver.CompletionLearns(), i == 2);
+    const TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+    EXPECT_EQ(o.trial, i);
+    EXPECT_TRUE(o.ran_fallback);
+    EXPECT_TRUE(o.accepted);
+    EXPECT_EQ(o.learned, i == 2);
+    EXPECT_DOUBLE_EQ(o.cost, EvaluateCost(p.problem, measured).total);
+  }
+  // Trial 2 initialized the learner: x^0 is its measurement, the next law is the learner's.
+  EXPECT_EQ(driver.learner()->nominal().T, measured.T);
+  EXPECT_FALSE(driver.runs_fallback());
+  ASSERT_NE(driver.learned_law(), nullptr);
+  EXPECT_EQ(&driver.law(), driver.learned_law());
+  EXPECT_EQ(for_learner, (std::vector<bool>{false, false, true}));
+  const TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+  EXPECT_FALSE(o.ran_fallback);
+  EXPECT_TRUE(o.learned);
+  EXPECT_EQ(driver.learner()->trials(), 1);
+}
+
+TEST_F(TrialDriverTest, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw) {
+  // (36) can never hold and alpha_min lies just below alpha_0: the first trial terminates the
+  // line search with no accepted iteration, and from then on u^0 runs (not Learner::NextTrial's
+  // replay of x^0's inputs).
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.learner.c = 1e12;
+  settings.learner.alpha_min = 0.6;
+  TrialDriver driver(p.problem, settings, fallback);
+  const std::vector<TrialOutcome> o = driver.Run(plant, lq.x0, 4);
+  EXPECT_TRUE(o[0].ran_fallback);
+  EXPECT_FALSE(o[1].ran_fallback);
+  EXPECT_FALSE(o[1].accepted);
+  EXPECT_EQ(o[1].status, LearnerStatus::kLineSearchFailed);
+  EXPECT_TRUE(o[2].ran_fallback);
+  EXPECT_TRUE(o[3].ran_fallback);
+  EXPECT_TRUE(driver.runs_fallback());
+  EXPECT_EQ(driver.learner()->iteration(), 0);
+  // u^0 from the same start measures the cost of x^0 again.
+  EXPECT_DOUBLE_EQ(o[2].cost, o[0].cost);
+}
+
+TEST_F(TrialDriverTest, FreezeKeepsTheCurrentLawAndStopsLearning) {
+  TrialDriver driver(p.problem, DriverSettings(Method::kAlg1), fallback);
+  driver.Run(plant, lq.x0, 4);
+  Policy* law = &driver.law();
+  const int iteration = driver.learner()->iteration();
+  const int trials = driver.learner()->trials();
+  const double nominal = driver.learner()->nominal_cost();
+  driver.Freeze();
+  EXPECT_TRUE(driver.frozen());
+  EXPECT_FALSE(driver.CompletionLearns());
+  const std::vector<TrialOutcome> frozen = driver.Run(plant, lq.x0, 3);
+  for (const TrialOutcome& o : frozen) {
+    EXPECT_TRUE(o.accepted);
+    EXPECT_FALSE(o.learned);
+    EXPECT_EQ(&driver.law(), law);
+    EXPECT_DOUBLE_EQ(o.cost, frozen[0].cost);  // the same law from the same start
+  }
+  EXPECT_EQ(driver.learner()->iteration(), iteration);
+  EXPECT_EQ(driver.learner()->trials(), trials);
+  EXPECT_EQ(driver.learner()->nominal_cost(), nominal);
+  driver.Reset();
+  EXPECT_FALSE(driver.frozen());
+  EXPECT_TRUE(driver.runs_fallback());
+  EXPECT_EQ(driver.trial(), 0);
+}
+
+TEST_F(TrialDriverTest, OcfbRunsTheFallbackEveryTrial) {
+  TrialDriver driver(p.problem, DriverSettings(Method::kOcfb), fallback);
+  EXPECT_EQ(driver.learner(), nullptr);
+  EXPECT_FALSE(driver.CompletionLearns());
+  for (const TrialOutcome& o : driver.Run(plant, lq.x0, 3)) {
+    EXPECT_TRUE(o.ran_fallback);
+    EXPECT_TRUE(o.accepted);
+    EXPECT_FALSE(o.learned);
+    EXPECT_EQ(o.status, LearnerStatus::kRunning);
+  }
+  EXPECT_EQ(&driver.law(), &fallback);
+}
+
+TEST_F(TrialDriverTest, BadSettingsAreNamed) {
+  TrialDriverSettings zero = DriverSettings(Method::kAlg1);
+  zero.warmup_trials = 0;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, zero, fallback); },
+                   "TrialDriverSettings: warmup_trials = 0, expected >= 1");
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, DriverSettings(Method::kMrl), fallback); },
+                   "method kMrl needs a prediction plant");
+  TrialDriverSettings bad_gamma = DriverSettings(Method::kAlg1);
+  bad_gamma.learner.gamma = 2.0;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, bad_gamma, fallback); }, "gamma");
+  TrialDriver d(p.problem, DriverSettings(Method::kAlg1), fallback);
+  ExpectThrowsWith([&] { d.Run(plant, lq.x0, -1); }, "trials = -1");
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
