@@ -57,6 +57,8 @@ struct BackwardPassSettings {
   /// semidefinite cone before it enters P (allocates an eigen-decomposition per switch).
   /// Default false.
   bool psd_switching_hessians = false;
+  /// kRiccati: most sub-steps per sample interval where h |A_cl|_inf > 1 (stiff). >= 1; default 1000.
+  int max_substeps = 1000;
   /// Cyclic (periodic) value gamma_c in [0, 1], NOT in the paper, kRiccati only. 0 (default):
   /// the problem ends at T_K. > 0, for a system with a cycle reset g_{K-1}:
   /// P_xx(K) = Phi_xx + gamma_c G^T P_0 G (G = dg_{K-1}/dx at the end of the nominal, P_0 the
@@ -199,6 +201,7 @@ class BackwardPass {
   // Stage state and derivative.
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev);
   bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
+  double RiccatiStiffness(int n, const ConstMatrixRef& P);
   void Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
                   const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                   bool store_mid, int s);
@@ -256,6 +259,9 @@ class BackwardPass {
   bool riccati_term_ = false;  // tmp_ holds the Riccati term of the last Derivative
   Eigen::LLT<Matrix> llt_;  // m x m
   Matrix hff_;              // m x m
+  Matrix stiff_gain_;       // m x n_max: H_FF^-1 (F_u^T P_xx + L_ux) of the stiffness estimate
+  Matrix stiff_k_;          // m x n_max: H_FF^-1 stiff_gain_
+  Matrix stiff_acl_;        // n_max x n_max: the closed-loop D f_x - F_u gain
   std::vector<int> free_;   // m
   BoxQP qp_;
   // Terminal event projection.

@@ -42,6 +42,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
         "BackwardPassSettings: cyclic_max_sweeps must be >= 1 and "
         "cyclic_tolerance > 0");
   }
+  if (settings.max_substeps < 1) {
+    throw InvalidArgument("BackwardPassSettings: max_substeps = " +
+                          std::to_string(settings.max_substeps) + ", expected >= 1");
+  }
   problem_ = &problem;
   settings_ = settings;
   const SwitchedSystem& sys = *problem.system;
@@ -101,6 +105,9 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   tmp_.setZero(nz_max_, nz_max_);
   llt_ = Eigen::LLT<Matrix>(m_);
   hff_.setZero(m_, m_);
+  stiff_gain_.setZero(m_, n_max_);
+  stiff_k_.setZero(m_, n_max_);
+  stiff_acl_.setZero(n_max_, n_max_);
   free_.assign(m_, 0);
   qp_.Allocate(m_);
   event_f_.setZero(n_max_);
@@ -591,6 +598,18 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
   if (!separate_lambda) lam = p;
 }
 
+double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P) {
+  auto gain = stiff_gain_.leftCols(n);
+  auto acl = stiff_acl_.topLeftCorner(n, n);
+  gain = c_.lux.leftCols(n);
+  gain.noalias() += c_.fu.topRows(n).transpose() * P.topLeftCorner(n, n);
+  auto kx = stiff_k_.leftCols(n);
+  kx.noalias() = c_.Hinv * gain;
+  acl = c_.fx.topLeftCorner(n, n);
+  acl.noalias() -= c_.fu.topRows(n) * kx;
+  return acl.cwiseAbs().rowwise().sum().maxCoeff();
+}
+
 bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic) {
   predicted_linear_ = 0;
   predicted_quadratic_ = 0;
@@ -611,14 +630,16 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
         return false;
       }
       const double h = tau_(s + 1) - tau_(s);
-      // Sub-steps where the Riccati term makes the equation stiff for an explicit step: the
-      // linearization of -P B H^-1 B^T P has norm ~ |F_u|^2 |H_FF^-1| |P|; keep h times it
-      // (and |D f_x|) below 1 (explicit midpoint is stable up to 2 on the real axis).
+      // Sub-steps where the Riccati equation is stiff for an explicit step: its linearization
+      // dP -> A_cl^T dP + dP A_cl has eigenvalues lambda_i + lambda_j of the closed loop A_cl, so
+      // h |A_cl|_inf <= 1 keeps h |lambda_i + lambda_j| <= 2 (explicit midpoint's real-axis
+      // limit; RK4's is 2.8).
       int substeps = 1;
       if (riccati && m_ > 0 && h > 0) {
-        const double fu2 = c_.fu.topRows(n).squaredNorm();
-        const double stiff = fu2 * c_.Hinv.norm() * P.norm() + c_.fx.topLeftCorner(n, n).norm();
-        if (h * stiff > 1.0) substeps = static_cast<int>(std::min(1000.0, std::ceil(h * stiff)));
+        const double stiff = RiccatiStiffness(n, P);
+        if (h * stiff > 1.0) {
+          substeps = static_cast<int>(std::min<double>(settings_.max_substeps, std::ceil(h * stiff)));
+        }
       }
       for (int sub = 0; sub < substeps; ++sub) {
         IntegrateStep(k, n, h / substeps, s, sub == substeps / 2, h);

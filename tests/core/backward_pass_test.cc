@@ -431,6 +431,58 @@ TEST(BackwardPass, RiccatiVariantMatchesTheScalarRiccatiEquation) {
   }
 }
 
+// A stiff Riccati equation on a coarse grid: r = 1e-4 makes the closed loop a - b^2 P / r
+// reach -500 at the terminal P(T) = 0.05, so an explicit step of h = 0.06 s (21 samples over
+// 1.2 s) is unstable by a factor of 30. The pass sub-steps such intervals (h |A_cl| <= 1 per
+// sub-step) and follows a fine RK4 reference of the scalar Riccati equation; with
+// max_substeps = 1 it cannot.
+TEST(BackwardPass, StiffRiccatiIsSubStepped) {
+  ScalarLq stiff;
+  stiff.r = 1e-4;
+  stiff.s = 0.05;
+  ScalarLqSetup setup(stiff);
+  setup.problem.bounds.u_min(0) = -std::numeric_limits<double>::infinity();
+  setup.problem.bounds.u_max(0) = std::numeric_limits<double>::infinity();
+  const int N = 21;
+  const Trajectory traj = setup.Exact(N);
+  // Reference: dP/dt = -(2 a P + q - P^2 b^2 / r), 2000 RK4 steps per sample interval.
+  auto f = [&](double P) { return 2 * stiff.a * P + stiff.q - P * P * stiff.b * stiff.b / stiff.r; };
+  std::vector<double> ref(N);
+  double P = stiff.s;
+  ref[N - 1] = P;
+  const int fine = 2000;
+  const double h = stiff.T / (N - 1) / fine;
+  for (int j = N - 2; j >= 0; --j) {
+    for (int i = 0; i < fine; ++i) {
+      const double k1 = f(P), k2 = f(P + 0.5 * h * k1), k3 = f(P + 0.5 * h * k2), k4 = f(P + h * k3);
+      P += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+    }
+    ref[j] = P;
+  }
+  auto max_error = [&](int max_substeps) {
+    BackwardPassSettings settings;
+    settings.keep_P_trajectory = true;
+    settings.equation = BackwardEquation::kRiccati;
+    settings.max_substeps = max_substeps;
+    BackwardPass pass;
+    pass.Allocate(setup.problem, N, settings);
+    pass.Run(traj, 0.0);
+    double e = 0;
+    for (int j = 0; j < N; ++j) {
+      const double Pj = pass.P(0, j)(0, 0);
+      e = std::isfinite(Pj) ? std::max(e, std::abs(Pj - ref[j]) / ref[j]) : 1e300;
+    }
+    if (pass.status() != BackwardStatus::kOk) e = 1e300;
+    return e;
+  };
+  const double sub = max_error(BackwardPassSettings().max_substeps);
+  const double single = max_error(1);
+  std::printf("stiff Riccati: max relative error of P %.3g sub-stepped, %.3g with one step\n", sub,
+              single);
+  EXPECT_LT(sub, 1e-3);
+  EXPECT_GT(single, 1.0);
+}
+
 TEST(BackwardPass, RiccatiIsBoxAware) {
   // The nominal input sits on its upper bound and the gradient pushes it out (p < -r u0 / b
   // everywhere for x0 = -1): the full step is clamped on every interval, so the clamped input
