@@ -202,6 +202,7 @@ class BackwardPass {
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev);
   bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
   double RiccatiStiffness(int n, const ConstMatrixRef& P);
+  double RiccatiStiffnessBound(int n, const ConstMatrixRef& P) const;
   void Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
                   const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                   bool store_mid, int s);

@@ -598,6 +598,18 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
   if (!separate_lambda) lam = p;
 }
 
+double BackwardPass::RiccatiStiffnessBound(int n, const ConstMatrixRef& P) const {
+  // |A_cl|_inf <= |D f_x|_inf + |F_u|_inf |H^-1|_inf (|F_u^T|_inf |P_xx|_inf + |L_ux|_inf).
+  const auto fu = c_.fu.topRows(n);
+  const double fx = c_.fx.topLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
+  const double fu_inf = fu.cwiseAbs().rowwise().sum().maxCoeff();
+  const double fu_1 = fu.cwiseAbs().colwise().sum().maxCoeff();
+  const double p_inf = P.topLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
+  const double h_inf = c_.Hinv.cwiseAbs().rowwise().sum().maxCoeff();
+  const double lux = c_.lux.leftCols(n).cwiseAbs().rowwise().sum().maxCoeff();
+  return fx + fu_inf * h_inf * (fu_1 * p_inf + lux);
+}
+
 double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P) {
   auto gain = stiff_gain_.leftCols(n);
   auto acl = stiff_acl_.topLeftCorner(n, n);
@@ -635,8 +647,10 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       // h |A_cl|_inf <= 1 keeps h |lambda_i + lambda_j| <= 2 (explicit midpoint's real-axis
       // limit; RK4's is 2.8).
       int substeps = 1;
-      if (riccati && m_ > 0 && h > 0) {
-        const double stiff = RiccatiStiffness(n, P);
+      if (riccati && m_ > 0 && h > 0 && settings_.max_substeps > 1) {
+        // The exact |A_cl|_inf (an n x n x m product) only where the cheap bound allows
+        // stiffness.
+        const double stiff = h * RiccatiStiffnessBound(n, P) > 1.0 ? RiccatiStiffness(n, P) : 0.0;
         if (h * stiff > 1.0) {
           substeps = static_cast<int>(std::min<double>(settings_.max_substeps, std::ceil(h * stiff)));
         }
