@@ -86,9 +86,7 @@ int main() {
       Eigen::Vector2d(1.0, 1.0),
       [](int, double, const ddoc::ConstVectorRef&, ddoc::VectorRef u) { u.setConstant(0.5); });
 
-  ddoc::LearnerSettings settings;  // c, gamma, epsilon, Delta_i, ... (commented defaults)
-  settings.epsilon = 1e-7;
-  settings.max_trials = 300;
+  ddoc::LearnerSettings settings;  // the default preset (commented defaults in learner.h)
   ddoc::Learner learner(problem, settings);
   const ddoc::Vector x0 = ddoc::Vector::Zero(2);
   const ddoc::SolveResult result = learner.Solve(plant, plant, x0, initial);
