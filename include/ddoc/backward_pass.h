@@ -9,6 +9,7 @@
 
 #include "ddoc/box_qp.h"
 #include "ddoc/problem.h"
+#include "ddoc/sample_layout.h"
 #include "ddoc/trajectory.h"
 
 namespace ddoc {
@@ -145,11 +146,11 @@ class BackwardPass {
   int input_dim() const { return m_; }
   int max_samples() const { return max_samples_; }
   /// Number of samples of mode k in the last Run.
-  int num_samples(int k) const { return counts_[k]; }
+  int num_samples(int k) const { return layout_.count(k); }
   /// Global (mode-major) index of sample (k, j).
-  int index(int k, int j) const { return offsets_[k] + j; }
+  int index(int k, int j) const { return layout_.index(k, j); }
   /// n_k + K.
-  int augmented_dim(int k) const { return dims_[k] + K_; }
+  int augmented_dim(int k) const { return layout_.dim(k) + K_; }
 
   double tau(int k, int j) const { return tau_(index(k, j)); }
   /// P and p at sample (k, j). P only at the first and last sample of a mode unless
@@ -221,9 +222,7 @@ class BackwardPass {
   double mu_ = 0;
   double luu_scale_ = 0;
   bool box_ = false;  // some input bound is finite
-  std::vector<int> dims_;     // n_k
-  std::vector<int> counts_;   // N_k of the last run
-  std::vector<int> offsets_;  // first global index of mode k
+  SampleLayout layout_;      // n_k, N_k of the last run, mode-major sample indices
   // Per-sample storage, one column per global sample (leading entries used).
   Vector tau_;         // S
   Matrix P_store_;     // nz_max^2 x S

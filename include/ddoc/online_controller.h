@@ -10,6 +10,7 @@
 #include "ddoc/box_qp.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
+#include "ddoc/sample_layout.h"
 #include "ddoc/trajectory.h"
 
 namespace ddoc {
@@ -100,9 +101,10 @@ class OnlineController : public Policy {
 
   const Problem* problem_ = nullptr;
   OnlineControllerSettings settings_;
-  int K_ = 0, m_ = 0, n_max_ = 0, max_samples_ = 0;
+  int K_ = 0, m_ = 0, n_max_ = 0;
   bool loaded_ = false;
-  std::vector<int> dims_, counts_, offsets_, cursor_;
+  SampleLayout layout_;          // n_k, N_k of the loaded nominal, mode-major sample indices
+  std::vector<int> cursor_;      // K: last interval found by Step, per mode
   double alpha_ = 0;
   Vector dT_, planned_T_, nominal_T_, planned_durations_;  // K
   // Per sample (global index, mode-major).

@@ -54,10 +54,7 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   n_max_ = sys.max_state_dim();
   nz_max_ = n_max_ + K_;
   max_samples_ = max_samples;
-  dims_.resize(K_);
-  for (int k = 0; k < K_; ++k) dims_[k] = sys.state_dim(k);
-  counts_.assign(K_, 0);
-  offsets_.assign(K_, 0);
+  layout_.Allocate(sys, max_samples, "BackwardPass::Allocate");
   box_ = false;
   for (int i = 0; i < m_; ++i) {
     box_ = box_ || std::isfinite(problem.bounds.u_min(i)) || std::isfinite(problem.bounds.u_max(i));
@@ -121,7 +118,7 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
 }
 
 Eigen::Map<const Matrix> BackwardPass::P(int k, int j) const {
-  if (!settings_.keep_P_trajectory && j != 0 && j != counts_[k] - 1) {
+  if (!settings_.keep_P_trajectory && j != 0 && j != layout_.count(k) - 1) {
     throw InvalidArgument("BackwardPass::P(" + std::to_string(k) + ", " + std::to_string(j) +
                           "): only the first and last sample of a mode are kept (set "
                           "BackwardPassSettings::keep_P_trajectory)");
@@ -148,7 +145,7 @@ Eigen::Map<const Vector> BackwardPass::Step(int k, int j) const {
   return Eigen::Map<const Vector>(step_store_.col(index(k, j)).data(), m_);
 }
 Eigen::Map<const Vector> BackwardPass::p2_initial() const {
-  return Eigen::Map<const Vector>(p_store_.col(0).data() + dims_[0], K_);
+  return Eigen::Map<const Vector>(p_store_.col(0).data() + layout_.dim(0), K_);
 }
 Matrix BackwardPass::P22_initial() const { return P(0, 0).bottomRightCorner(K_, K_); }
 
@@ -199,7 +196,7 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   // Interval j of mode k: u_j held on [t_j, t_{j+1}], coefficients at the midpoint state.
   const SwitchedSystem& sys = *problem_->system;
   const SwitchedCost& cost = *problem_->cost;
-  const int n = dims_[k];
+  const int n = layout_.dim(k);
   const ModeTrajectory& mode = nominal.modes[k];
   auto xm = xmid_.head(n);
   xm = 0.5 * (mode.x.col(j) + mode.x.col(j + 1));
@@ -410,10 +407,10 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
 }
 
 void BackwardPass::StoreState(int k, int j) {
-  const int nz = dims_[k] + K_;
+  const int nz = layout_.dim(k) + K_;
   const int s = index(k, j);
   p_store_.col(s).head(nz) = p_.head(nz);
-  if (!settings_.keep_P_trajectory && j != 0 && j != counts_[k] - 1) return;
+  if (!settings_.keep_P_trajectory && j != 0 && j != layout_.count(k) - 1) return;
   Eigen::Map<Matrix>(P_store_.col(s).data(), nz, nz) = P_.topLeftCorner(nz, nz);
 }
 
@@ -427,7 +424,7 @@ void BackwardPass::CopyOutputs(int from, int to) {
 
 bool BackwardPass::EventProjection(int k, const Trajectory& nominal) {
   const SwitchedSystem& sys = *problem_->system;
-  const int n = dims_[k];
+  const int n = layout_.dim(k);
   const ModeTrajectory& mode = nominal.modes[k];
   const int last = mode.num_samples() - 1;
   auto hx = event_hx_.head(n);
@@ -447,7 +444,7 @@ void BackwardPass::JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic)
   // Terminal condition (k = K-1) or the jump at tau = k+1 into the pre-switch sample of mode k:
   //   P^- = Phi_zz + G^T P^+ G,  p^- = Phi_z + G^T p^+,  G = blockdiag(g_x, I_K).
   const SwitchedSystem& sys = *problem_->system;
-  const int n = dims_[k];
+  const int n = layout_.dim(k);
   const int K = K_;
   const int nz = n + K;
   const ModeTrajectory& mode = nominal.modes[k];
@@ -489,7 +486,7 @@ void BackwardPass::JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic)
     p_.head(n) = phiz;
     lam_.head(nz) = p_.head(nz);
     if (cyclic) {  // + gamma_c G^T P_0 G: the value of the next cycle
-      const int n0 = dims_[0];
+      const int n0 = layout_.dim(0);
       auto G = cyclic_G_.topLeftCorner(n0, n);
       auto t = cyclic_tmp_.topLeftCorner(n0, n);
       t.noalias() = cyclic_P0_.topLeftCorner(n0, n0) * G;
@@ -497,7 +494,7 @@ void BackwardPass::JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic)
     }
     return;
   }
-  const int n1 = dims_[k + 1];
+  const int n1 = layout_.dim(k + 1);
   const int nz1 = n1 + K;
   auto gx = gx_.topLeftCorner(n1, n);
   sys.ResetDerivative(k, x, gx);
@@ -627,9 +624,9 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
   predicted_quadratic_ = 0;
   const bool riccati = settings_.equation == BackwardEquation::kRiccati;
   for (int k = K_ - 1; k >= 0; --k) {
-    const int n = dims_[k];
+    const int n = layout_.dim(k);
     const int nz = n + K_;
-    const int N = counts_[k];
+    const int N = layout_.count(k);
     JumpOrTerminal(k, nominal, cyclic);
     StoreState(k, N - 1);
     auto P = P_.topLeftCorner(nz, nz);
@@ -666,7 +663,7 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       return false;
     }
   }
-  gradient_T_ = lam_.segment(dims_[0], K_);
+  gradient_T_ = lam_.segment(layout_.dim(0), K_);
   return true;
 }
 
@@ -687,26 +684,7 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
                           std::to_string(nominal.T.size()) +
                           ", expected K = " + std::to_string(K_));
   }
-  int total = 0;
-  for (int k = 0; k < K_; ++k) {
-    const ModeTrajectory& mode = nominal.modes[k];
-    const int N = mode.num_samples();
-    if (N < 2 || mode.x.rows() != dims_[k] || mode.x.cols() != N || mode.u.rows() != m_ ||
-        mode.u.cols() != N) {
-      std::ostringstream os;
-      os << "BackwardPass::Run: mode " << k << " has " << N << " samples, x " << mode.x.rows()
-         << "x" << mode.x.cols() << ", u " << mode.u.rows() << "x" << mode.u.cols()
-         << "; expected >= 2 samples, x n_k = " << dims_[k] << " rows, u m = " << m_ << " rows";
-      throw InvalidArgument(os.str());
-    }
-    offsets_[k] = total;
-    counts_[k] = N;
-    total += N;
-  }
-  if (total > max_samples_) {
-    throw InvalidArgument("BackwardPass::Run: trajectory has " + std::to_string(total) +
-                          " samples, more than max_samples = " + std::to_string(max_samples_));
-  }
+  const int total = layout_.Assign(nominal, "BackwardPass::Run");
   if (settings_.use_previous_du && du_prev != nullptr &&
       (du_prev->rows() != m_ || du_prev->cols() != total)) {
     throw InvalidArgument("BackwardPass::Run: du_prev is " + std::to_string(du_prev->rows()) + "x" +
@@ -715,7 +693,7 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
   }
   const Matrix* du = settings_.use_previous_du ? du_prev : nullptr;
   for (int k = 0; k < K_; ++k) {
-    for (int j = 0; j < counts_[k]; ++j) tau_(offsets_[k] + j) = nominal.Tau(k, j);
+    for (int j = 0; j < layout_.count(k); ++j) tau_(layout_.index(k, j)) = nominal.Tau(k, j);
   }
   k_.setZero();
   terminal_projected_ = settings_.terminal_event && EventProjection(K_ - 1, nominal);
@@ -728,8 +706,8 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
     valid_ = true;
     return true;
   }
-  const int n0 = dims_[0];
-  const int nK = dims_[K_ - 1];
+  const int n0 = layout_.dim(0);
+  const int nK = layout_.dim(K_ - 1);
   {
     const ModeTrajectory& last = nominal.modes[K_ - 1];
     problem_->system->ResetDerivative(K_ - 1, last.x.col(last.num_samples() - 1),

@@ -48,11 +48,7 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   K_ = sys.num_modes();
   m_ = sys.input_dim();
   n_max_ = sys.max_state_dim();
-  max_samples_ = max_samples;
-  dims_.resize(K_);
-  for (int k = 0; k < K_; ++k) dims_[k] = sys.state_dim(k);
-  counts_.assign(K_, 0);
-  offsets_.assign(K_, 0);
+  layout_.Allocate(sys, max_samples, "OnlineController::Allocate");
   cursor_.assign(K_, 0);
   dT_.setZero(K_);
   planned_T_.setZero(K_);
@@ -97,22 +93,15 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
     throw InvalidArgument("OnlineController::Load: alpha = " + std::to_string(alpha) +
                           " must be finite and >= 0, dT finite");
   }
-  int total = 0;
+  layout_.Assign(nominal, "OnlineController::Load");
   for (int k = 0; k < K_; ++k) {
-    const int N = nominal.modes[k].num_samples();
-    if (N != pass.num_samples(k) || nominal.modes[k].x.rows() != dims_[k]) {
+    const int N = layout_.count(k);
+    if (N != pass.num_samples(k)) {
       throw InvalidArgument("OnlineController::Load: mode " + std::to_string(k) +
                             " of the trajectory does not match the backward pass (" +
                             std::to_string(N) + " vs " + std::to_string(pass.num_samples(k)) +
                             " samples)");
     }
-    offsets_[k] = total;
-    counts_[k] = N;
-    total += N;
-  }
-  if (total > max_samples_) {
-    throw InvalidArgument("OnlineController::Load: " + std::to_string(total) +
-                          " samples, more than max_samples = " + std::to_string(max_samples_));
   }
   alpha_ = alpha;
   // The convention of the equation: alpha on all of b (the paper) or on the feed-forward.
@@ -130,9 +119,9 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
     }
   }
   for (int k = 0; k < K_; ++k) {
-    const int n = dims_[k];
-    for (int j = 0; j < counts_[k]; ++j) {
-      const int s = offsets_[k] + j;
+    const int n = layout_.dim(k);
+    for (int j = 0; j < layout_.count(k); ++j) {
+      const int s = layout_.index(k, j);
       tau_(s) = pass.tau(k, j);
       x_.col(s).head(n) = nominal.modes[k].x.col(j);
       u_.col(s) = nominal.modes[k].u.col(j);
@@ -167,8 +156,8 @@ void OnlineController::BeginTrial() {
 }
 
 double OnlineController::Locate(int k, double tau, int* j_out) {
-  const int off = offsets_[k];
-  const int N = counts_[k];
+  const int off = layout_.offset(k);
+  const int N = layout_.count(k);
   int j = std::min(cursor_[k], N - 2);
   while (j > 0 && tau_(off + j) > tau) --j;
   while (j < N - 2 && tau_(off + j + 1) < tau) ++j;
@@ -195,7 +184,7 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
     throw InvalidArgument("OnlineController::Step: mode k = " + std::to_string(k) +
                           " out of range [0, " + std::to_string(K_) + ")");
   }
-  const int n = dims_[k];
+  const int n = layout_.dim(k);
   if (x_measured.size() != n || u_out.size() != m_) {
     throw InvalidArgument("OnlineController::Step(k=" + std::to_string(k) + "): x has size " +
                           std::to_string(x_measured.size()) + " (expected " + std::to_string(n) +
@@ -209,7 +198,7 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
                                     planned_durations_(k));
   int j = 0;
   const double w = Locate(k, tau, &j);
-  const int s0 = offsets_[k] + j;
+  const int s0 = layout_.index(k, j);
   const int s1 = s0 + 1;
   // Nominal input at tau.
   unom_ = (1.0 - w) * u_.col(s0) + w * u_.col(s1);
