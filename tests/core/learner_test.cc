@@ -271,14 +271,6 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
 
 INSTANTIATE_TEST_SUITE_P(Presets, TwoModeLqTest, ::testing::Values(0, 1));
 
-}  // namespace
-}  // namespace testing
-}  // namespace ddoc
-
-namespace ddoc {
-namespace testing {
-namespace {
-
 // The measured cost change of one trial at step size alpha from the nominal of `initial`.
 double MeasuredChange(const Problem& problem, const Plant& /*unused*/, ModelPlant* plant,
                       const Vector& x0, Policy* initial, LearnerSettings settings, double alpha,
@@ -356,14 +348,6 @@ TEST(Learner, EveryPresetStepsDownhill) {
   EXPECT_EQ(checked, 10);
 }
 
-}  // namespace
-}  // namespace testing
-}  // namespace ddoc
-
-namespace ddoc {
-namespace testing {
-namespace {
-
 // Defect 2 of issue 17: with a cap on the duration steps, runs that start with a duration on (or
 // near) its bound used to stop "converged" with a zero step short of the optimum. From 29 such
 // starts the default learner must either reach the optimum or say that it did not converge.
@@ -392,14 +376,6 @@ TEST(Learner, NeverConvergesShortOfTheOptimumFromStartsOnABound) {
   // And the cap is no obstacle: every start gets there within the trials given.
   EXPECT_EQ(converged, 29);
 }
-
-}  // namespace
-}  // namespace testing
-}  // namespace ddoc
-
-namespace ddoc {
-namespace testing {
-namespace {
 
 // Defect 4 of issue 17: the regularization must not bias the answer. On a plain LQR (one mode,
 // fixed horizon, unbounded input) the default learner converges with mu = 0, and its gain

@@ -27,6 +27,20 @@ namespace ddoc {
 namespace testing {
 namespace {
 
+// The scalar input u(k, t) of every mode held on a grid of n intervals per mode at its interval
+// midpoints (the last sample holds the value at the mode's end), for HeldInputCost.
+std::vector<HeldInputs> HeldMidpointInputs(const std::function<double(int, double)>& u,
+                                           const Vector& T, int n) {
+  std::vector<HeldInputs> modes(static_cast<size_t>(T.size()));
+  for (int k = 0; k < T.size(); ++k) {
+    HeldInputs& mode = modes[static_cast<size_t>(k)];
+    mode.t = Vector::LinSpaced(n + 1, k == 0 ? 0.0 : T(k - 1), T(k));
+    mode.u.resize(1, n + 1);
+    for (int j = 0; j <= n; ++j) mode.u(0, j) = u(k, j < n ? 0.5 * (mode.t(j) + mode.t(j + 1)) : T(k));
+  }
+  return modes;
+}
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double RelativeError(double value, double reference) {
@@ -290,17 +304,8 @@ TEST(StandardReferences, Exp0Bounded) {
   // The extremal's input, held on a fine grid (midpoint values) and simulated independently
   // (open loop through an unstable system, eigenvalues up to 3/s: a fine grid).
   const auto u_fine = ExtremalInput(fine, r.T, e_fine.lambda0);
-  std::vector<HeldInputs> modes(2);
-  for (int k = 0; k < 2; ++k) {
-    const double t0 = k == 0 ? 0.0 : r.T(0);
-    const int n = 8000;
-    modes[k].t = Vector::LinSpaced(n + 1, t0, r.T(k));
-    modes[k].u.resize(1, n + 1);
-    for (int j = 0; j <= n; ++j) {
-      modes[k].u(0, j) = u_fine(k, j < n ? 0.5 * (modes[k].t(j) + modes[k].t(j + 1)) : r.T(k));
-    }
-  }
-  const double forward = HeldInputCost(IndependentModelOf(*sp), p.x0, modes, 1);
+  const double forward =
+      HeldInputCost(IndependentModelOf(*sp), p.x0, HeldMidpointInputs(u_fine, r.T, 8000), 1);
   EXPECT_LT(RelativeError(forward, r.cost), 1e-8) << forward;
   // Dense search: the optimal cost for the switching instant on a 0.05 s grid.
   Vector lambda = e.lambda0;
@@ -351,17 +356,8 @@ TEST(StandardReferences, Exp1) {
   EXPECT_LT(e_fine.gradient.cwiseAbs().maxCoeff(), 1e-6);
   // Forward simulation of the extremal's input (midpoint values held on a fine grid).
   const auto u = ExtremalInput(fine, r.T, e_fine.lambda0);
-  std::vector<HeldInputs> modes(3);
-  for (int k = 0; k < 3; ++k) {
-    const double t0 = k == 0 ? 0.0 : r.T(k - 1);
-    const int n = 3000;
-    modes[k].t = Vector::LinSpaced(n + 1, t0, r.T(k));
-    modes[k].u.resize(1, n + 1);
-    for (int j = 0; j <= n; ++j) {
-      modes[k].u(0, j) = u(k, j < n ? 0.5 * (modes[k].t(j) + modes[k].t(j + 1)) : r.T(k));
-    }
-  }
-  const double forward = HeldInputCost(IndependentModelOf(*sp), p.x0, modes, 2);
+  const double forward =
+      HeldInputCost(IndependentModelOf(*sp), p.x0, HeldMidpointInputs(u, r.T, 3000), 2);
   EXPECT_LT(RelativeError(forward, r.cost), 1e-6) << forward;
   // From T^0 (coarser step: only the basin is checked here).
   ShootingProblem coarse = p;
