@@ -24,13 +24,7 @@ struct Scalar {
                      {Matrix::Zero(1, 1)}, {Vector::Zero(1)}};
   Problem problem;
   Scalar() {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -10);
-    problem.bounds.u_max = Vector::Constant(1, 10);
-    problem.bounds.duration_min = Vector::Constant(1, 0.1);
-    problem.bounds.duration_max = Vector::Constant(1, 5);
-    problem.surface_weights = Vector::Zero(1);
+    problem = BoxProblem(sys, cost, 10, 0.1, 5);
   }
   // The exact cost of the input sequence u_j held on [t_j, t_{j+1}] (the samples' inputs), from
   // x0 with the exact solution x(s) = (x_j + c) e^{a s} - c, c = b u / a, on each interval.

@@ -30,13 +30,7 @@ struct Ball {
         cost({Matrix::Identity(2, 2), Matrix::Identity(2, 2)},
              {Matrix::Identity(1, 1), Matrix::Identity(1, 1)}, {0, 0},
              {Matrix::Zero(2, 2), Matrix::Zero(2, 2)}, {Vector::Zero(2), Vector::Zero(2)}) {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -1);
-    problem.bounds.u_max = Vector::Constant(1, 1);
-    problem.bounds.duration_min = Vector::Constant(2, 0.05);
-    problem.bounds.duration_max = Vector::Constant(2, 2.0);
-    problem.surface_weights = Vector::Zero(2);
+    problem = BoxProblem(sys, cost, 1, 0.05, 2.0);
   }
 };
 

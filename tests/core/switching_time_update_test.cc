@@ -134,13 +134,7 @@ struct TwoModes {
                      {Vector::Zero(1), Vector::Zero(1)}};
   Problem problem;
   TwoModes() {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -1);
-    problem.bounds.u_max = Vector::Constant(1, 1);
-    problem.bounds.duration_min = Vector::Constant(2, 0.1);
-    problem.bounds.duration_max = Vector::Constant(2, 1.0);
-    problem.surface_weights = Vector::Zero(2);
+    problem = BoxProblem(sys, cost, 1, 0.1, 1.0);
   }
 };
 

@@ -178,6 +178,22 @@ class NonlinearCost : public AutoDiffCost<NonlinearCost> {
   }
 };
 
+/// A problem over `sys` and `cost` with the box |u_i| <= u_bound on every input, every mode's
+/// duration in [d_min, d_max] and no surface penalties. The system and cost must outlive it.
+inline Problem BoxProblem(const SwitchedSystem& sys, const SwitchedCost& cost, double u_bound,
+                          double d_min, double d_max) {
+  Problem p;
+  p.system = &sys;
+  p.cost = &cost;
+  const int m = sys.input_dim(), K = sys.num_modes();
+  p.bounds.u_min = Vector::Constant(m, -u_bound);
+  p.bounds.u_max = Vector::Constant(m, u_bound);
+  p.bounds.duration_min = Vector::Constant(K, d_min);
+  p.bounds.duration_max = Vector::Constant(K, d_max);
+  p.surface_weights = Vector::Zero(K);
+  return p;
+}
+
 /// The 3-mode nonlinear problem of the derivative and backward-pass tests: |u_i| <= 5, mode
 /// durations in [0.1, 2], surface penalties (0.7, 0, 0.4). `sys` has NonlinearSystem's dimensions.
 inline Problem MakeNonlinearProblem(const SwitchedSystem& sys, const SwitchedCost& cost) {

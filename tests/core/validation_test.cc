@@ -42,13 +42,7 @@ struct Base {
                      {Vector::Zero(2), Vector::Zero(3)}};
   Problem problem;
   Base() {
-    problem.system = &sys;
-    problem.cost = &cost;
-    problem.bounds.u_min = Vector::Constant(1, -1);
-    problem.bounds.u_max = Vector::Constant(1, 1);
-    problem.bounds.duration_min = Vector::Constant(2, 0.1);
-    problem.bounds.duration_max = Vector::Constant(2, 1.0);
-    problem.surface_weights = Vector::Zero(2);
+    problem = BoxProblem(sys, cost, 1, 0.1, 1.0);
   }
   Trajectory Valid() const {
     Trajectory t;
