@@ -398,6 +398,15 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     if (m > 0) TransposeTimes(fu, separate_lambda ? lam.head(n) : px, grad);
     grad += D * c_.lu;
     if (riccati) {
+      if (box_ && settings_.box_aware && m > 0) {
+        // The stored step is the box QP's at this (midpoint) gradient: the free set was fixed at
+        // the interval's right end, and the free inputs' Newton step at the midpoint can leave
+        // the box; the plant's QP (33) would clamp it, and the prediction would count what the
+        // plant cannot apply. From k_ as the warm start; it stays feasible and k^T g_u <= 0.
+        if (qp_.Solve(c_.H, gu_, c_.lo, c_.hi, k_) == BoxQPStatus::kNotPositiveDefinite) {
+          k_ = k_.cwiseMax(c_.lo).cwiseMin(c_.hi);
+        }
+      }
       step_store_.col(s) = k_;
     } else {
       step_store_.col(s).setZero();

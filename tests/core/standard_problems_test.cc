@@ -544,6 +544,52 @@ TEST_P(StandardProblemEngine, DefaultSettingsReachTheReference) {
                            << sp->reference_T.transpose();
 }
 
+// The default pass's stored step is what the plant's QP (33) can apply: inside the input box
+// at every sample, and a descent direction at its own gradient (k^T g_u <= 0). The free set of an
+// interval is fixed at its right end; its Newton step at the midpoint can leave the box (measured
+// before the fix on this run: a step of -3.66 on an input at its lower bound), and the
+// predicted decrease then counted a step the plant clamps away. Checked on every nominal of
+// exp0_bounded run from T^0 = (1, 1) s with u^0 + 0.5.
+TEST(StandardProblemPass, StoredStepIsFeasibleOnEveryNominal) {
+  const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0_bounded");
+  const Problem& problem = sp->problem;
+  FunctionPolicy::Function f = sp->initial_input;
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 1.0),
+                         [f](int k, double t, const ConstVectorRef& x, VectorRef u) {
+                           f(k, t, x, u);
+                           u.array() += 0.5;
+                         });
+  ModelPlant plant(problem);
+  LearnerSettings settings;
+  settings.max_trials = 40;
+  Learner learner(problem, settings);
+  Trajectory measured;
+  plant.Run(sp->x0, initial, &measured);
+  learner.Initialize(measured);
+  int checked = 0;
+  double worst_violation = 0, worst_slope = -kInf;
+  while (learner.status() == LearnerStatus::kRunning && learner.trials() < settings.max_trials) {
+    const BackwardPass& pass = learner.backward_pass();
+    const Trajectory& nominal = learner.nominal();
+    for (int k = 0; k < nominal.num_modes(); ++k) {
+      for (int j = 0; j + 1 < nominal.modes[k].num_samples(); ++j) {
+        const double u = nominal.modes[k].u(0, j), step = pass.Step(k, j)(0);
+        const double v = std::max(problem.bounds.u_min(0) - (u + step), (u + step) - problem.bounds.u_max(0));
+        worst_violation = std::max(worst_violation, v);
+        worst_slope = std::max(worst_slope, step * pass.Feedforward(k, j)(0));
+        ++checked;
+      }
+    }
+    plant.Run(sp->x0, learner.NextTrial(), &measured);
+    learner.CompleteTrial(measured);
+  }
+  std::printf("checked %d samples: worst box violation %.3g, worst k g_u %.3g\n", checked,
+              worst_violation, worst_slope);
+  EXPECT_GT(checked, 10000);
+  EXPECT_LE(worst_violation, 1e-9);
+  EXPECT_LE(worst_slope, 1e-12);
+}
+
 INSTANTIATE_TEST_SUITE_P(Suite, StandardProblemEngine,
                          ::testing::ValuesIn(StandardProblemNames()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
