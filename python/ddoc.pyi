@@ -171,3 +171,11 @@ class Learner:
     def iteration(self) -> int: ...
     @property
     def settings(self) -> LearnerSettings: ...
+
+
+def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
+               seconds: Optional[float] = None, robot: str = "", model_mjcf: str = "",
+               pushes: Sequence[str] = ..., no_pushes: bool = False) -> Dict[str, Any]:
+    """Runs a ddoc-hopper scenario (built with the MuJoCo application only); the columns of
+    hops.csv as NumPy arrays plus method, fell, fall_reason, sim_time."""
+    ...

@@ -699,6 +699,11 @@ class PyLearner {
 py::array_t<double> VectorToArray(const Vector& v) { return ToArray(v); }
 
 }  // namespace
+
+#ifdef DDOC_PYTHON_HOPPER
+void BindHopper(py::module_& mod);  // hopper_binding.cc
+#endif
+
 }  // namespace python
 }  // namespace ddoc
 
@@ -724,6 +729,10 @@ class SolveInterrupted(KeyboardInterrupt):
     result = None
 )", mod.attr("__dict__"));
   mod.attr("SolveInterrupted").attr("__module__") = "ddoc";
+
+#ifdef DDOC_PYTHON_HOPPER
+  BindHopper(mod);
+#endif
 
   py::class_<Bounds>(mod, "Bounds",
                      "Input bounds (6), per-mode duration bounds (7) and a box on the final time. "

@@ -103,3 +103,15 @@ def test_ctrl_c_keeps_partial_result():
     assert 0 < partial.trials < settings.max_trials
     assert len(partial.cost_history) == partial.iterations + 1
     assert partial.cost <= partial.cost_history[0]
+
+
+def test_keyboard_interrupt_from_a_callback_keeps_partial_result():
+    """A KeyboardInterrupt raised in Python during the solve (here: the progress callback)."""
+    problem, _ = two_mode_problem()
+
+    def progress(info):
+        if info["trial"] == 3:
+            raise KeyboardInterrupt
+    with pytest.raises(ddoc.SolveInterrupted) as info:
+        ddoc.Learner(problem).solve([0.0, 2.0], [1.0, 1.0], progress=progress)
+    assert info.value.result.trials == 3 and info.value.result.interrupted
