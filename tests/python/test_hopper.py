@@ -51,3 +51,18 @@ def test_run_hopper_bad_input():
         ddoc.run_hopper(SCENARIO, method="bogus", hops=1)
     with pytest.raises(ValueError, match="no_such_file.xml"):
         ddoc.run_hopper(str(ROOT / "no_such_file.xml"), hops=1)
+
+
+def test_run_hopper_ctrl_c_keeps_partial_table():
+    import signal
+    import threading
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(ddoc.SolveInterrupted) as info:
+            ddoc.run_hopper(SCENARIO, method="ocfb", hops=5000)
+    finally:
+        timer.cancel()
+    table = info.value.result
+    assert 0 < len(table["hop"]) < 5000
+    assert list(table["hop"]) == list(range(len(table["hop"])))
