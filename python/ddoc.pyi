@@ -91,12 +91,34 @@ class Problem:
     def input_dim(self) -> int: ...
     def validate(self) -> None: ...
 
+class BackwardEquation(Enum):
+    LYAPUNOV = ...
+    RICCATI = ...
+
+class BackwardIntegrator(Enum):
+    MIDPOINT = ...
+    RK4 = ...
+
 class BackwardPassSettings:
+    equation: BackwardEquation
+    integrator: BackwardIntegrator
+    cyclic_value: float
+    terminal_event: bool
     box_aware: bool
     time_curvature: bool
     use_previous_du: bool
     psd_switching_hessians: bool
     max_substeps: int
+    def __init__(self) -> None: ...
+
+class SwitchingTimeSettings:
+    relative_regularization: float
+    max_duration_step: float
+    def __init__(self) -> None: ...
+
+class OnlineControllerSettings:
+    interpolate: bool
+    warm_start: bool
     def __init__(self) -> None: ...
 
 class Acceptance(Enum):
@@ -126,6 +148,8 @@ class LearnerSettings:
     max_trials: int
     max_samples: int
     backward: BackwardPassSettings
+    switching: SwitchingTimeSettings
+    controller: OnlineControllerSettings
     def __init__(self) -> None: ...
     @staticmethod
     def paper() -> LearnerSettings: ...

@@ -882,13 +882,32 @@ class SolveInterrupted(KeyboardInterrupt):
       .def("validate", &Problem::Validate,
            "Raises ValueError naming the first problem found (sizes, bounds, weights).");
 
+  py::enum_<BackwardEquation>(mod, "BackwardEquation")
+      .value("LYAPUNOV", BackwardEquation::kLyapunov)
+      .value("RICCATI", BackwardEquation::kRiccati);
+  py::enum_<BackwardIntegrator>(mod, "BackwardIntegrator")
+      .value("MIDPOINT", BackwardIntegrator::kMidpoint)
+      .value("RK4", BackwardIntegrator::kRk4);
   py::class_<BackwardPassSettings>(mod, "BackwardPassSettings", "Settings of the backward pass (30).")
       .def(py::init<>())
+      .def_readwrite("equation", &BackwardPassSettings::equation)
+      .def_readwrite("integrator", &BackwardPassSettings::integrator)
+      .def_readwrite("cyclic_value", &BackwardPassSettings::cyclic_value)
+      .def_readwrite("terminal_event", &BackwardPassSettings::terminal_event)
       .def_readwrite("box_aware", &BackwardPassSettings::box_aware)
       .def_readwrite("time_curvature", &BackwardPassSettings::time_curvature)
       .def_readwrite("use_previous_du", &BackwardPassSettings::use_previous_du)
       .def_readwrite("psd_switching_hessians", &BackwardPassSettings::psd_switching_hessians)
       .def_readwrite("max_substeps", &BackwardPassSettings::max_substeps);
+
+  py::class_<SwitchingTimeSettings>(mod, "SwitchingTimeSettings", "Settings of the switching-time update (31).")
+      .def(py::init<>())
+      .def_readwrite("relative_regularization", &SwitchingTimeSettings::relative_regularization)
+      .def_readwrite("max_duration_step", &SwitchingTimeSettings::max_duration_step);
+  py::class_<OnlineControllerSettings>(mod, "OnlineControllerSettings", "Settings of the online law (33)-(34).")
+      .def(py::init<>())
+      .def_readwrite("interpolate", &OnlineControllerSettings::interpolate)
+      .def_readwrite("warm_start", &OnlineControllerSettings::warm_start);
 
   py::enum_<Acceptance>(mod, "Acceptance")
       .value("SUFFICIENT_DECREASE", Acceptance::kSufficientDecrease)
@@ -920,7 +939,9 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readwrite("regularization_min", &LearnerSettings::regularization_min)
       .def_readwrite("max_trials", &LearnerSettings::max_trials)
       .def_readwrite("max_samples", &LearnerSettings::max_samples)
-      .def_readwrite("backward", &LearnerSettings::backward);
+      .def_readwrite("backward", &LearnerSettings::backward)
+      .def_readwrite("switching", &LearnerSettings::switching)
+      .def_readwrite("controller", &LearnerSettings::controller);
 
   py::class_<ModeTrajectory>(mod, "ModeTrajectory", "Samples of one mode: t (N,), x (n_k, N), u (m, N).")
       .def_readonly("t", &ModeTrajectory::t)

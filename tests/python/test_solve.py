@@ -32,6 +32,11 @@ def test_settings_presets_and_attributes():
     default.max_trials = 3
     default.backward.box_aware = False
     assert default.max_trials == 3 and not default.backward.box_aware
+    assert paper.backward.equation == ddoc.BackwardEquation.LYAPUNOV
+    assert ddoc.LearnerSettings().backward.equation == ddoc.BackwardEquation.RICCATI
+    default.switching.max_duration_step = 0.05
+    default.controller.warm_start = False
+    assert default.switching.max_duration_step == 0.05 and not default.controller.warm_start
 
 
 def test_max_trials_and_progress():
