@@ -284,12 +284,29 @@ class QuadraticCost : public SwitchedCost {
   }
 
  protected:
+  // The cost does not know the system: a mode or size it was not given is an error, not UB.
+  void Check(int k, const ConstVectorRef& x, const ConstVectorRef* u) const {
+    if (k < 0 || k >= static_cast<int>(Q_.size())) {
+      throw InvalidArgument("QuadraticCost: mode k=" + std::to_string(k) + ", but Q has " +
+                            std::to_string(Q_.size()) + " entries (one per mode)");
+    }
+    if (x.size() != Q_[k].rows() || (u != nullptr && u->size() != R_[k].rows())) {
+      throw InvalidArgument("QuadraticCost(k=" + std::to_string(k) + "): x has size " +
+                            std::to_string(x.size()) + " and u size " +
+                            std::to_string(u ? u->size() : 0) + ", Q[k] is " +
+                            std::to_string(Q_[k].rows()) + " x " + std::to_string(Q_[k].rows()) +
+                            " and R[k] " + std::to_string(R_[k].rows()) + " x " +
+                            std::to_string(R_[k].rows()));
+    }
+  }
   double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    Check(k, x, &u);
     return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
   }
   void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
                             VectorRef lu, MatrixRef lxx, MatrixRef luu,
                             MatrixRef lux) const override {
+    Check(k, x, &u);
     lx.noalias() = Q_[k] * x;
     lx -= Qr_[k];
     if (u.size() > 0) lu.noalias() = R_[k] * u;
@@ -298,10 +315,12 @@ class QuadraticCost : public SwitchedCost {
     lux.setZero();
   }
   double DoSwitching(int k, const ConstVectorRef& x) const override {
+    Check(k, x, nullptr);
     return HalfQuadraticForm(S_[k], x, s_[k]);
   }
   void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
                               MatrixRef phixx) const override {
+    Check(k, x, nullptr);
     phix.noalias() = S_[k] * x;
     phix -= Ss_[k];
     phixx = S_[k];

@@ -97,3 +97,15 @@ def test_input_free_and_infinite_bounds():
     assert r.T.shape == (2,) and abs(r.T[-1] - 2.0) < 1e-12
     r = ddoc.Learner(lq_problem(m=1)).solve([1.0, 0.5], [1.0, 1.0])
     assert r.status == "converged" and r.cost < r.cost_history[0]
+
+
+def test_cost_that_does_not_fit_the_system():
+    system = ddoc.LinearSystem([np.eye(2)] * 2, [np.ones((2, 1))] * 2)
+    bounds = ddoc.Bounds(u_min=[-1.0], u_max=[1.0], duration_min=[0.1, 0.1],
+                         duration_max=[1.0, 1.0])
+    one_mode = ddoc.QuadraticCost(Q=[np.eye(2)], R=[np.eye(1)])
+    with pytest.raises(ValueError, match="mode k=1, but Q has 1 entries"):
+        ddoc.Learner(ddoc.Problem(system, one_mode, bounds)).solve([1.0, 0.0], [0.5, 0.5])
+    three_states = ddoc.QuadraticCost(Q=[np.eye(3)] * 2, R=[np.eye(1)] * 2)
+    with pytest.raises(ValueError, match="x has size 2"):
+        ddoc.Learner(ddoc.Problem(system, three_states, bounds)).solve([1.0, 0.0], [0.5, 0.5])
