@@ -1,0 +1,205 @@
+"""Type stub of the ddoc Python module (python/ddoc_module.cc). See docs/python.md."""
+from enum import Enum
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+Array = npt.NDArray[np.float64]
+
+class SolveInterrupted(KeyboardInterrupt):
+    """Ctrl-C during Learner.solve; .result is the SolveResult of the trials done so far."""
+    result: Optional[SolveResult]
+
+class Bounds:
+    """Input bounds (6), duration bounds (7) and a box on the final time."""
+    u_min: Array
+    u_max: Array
+    duration_min: Array
+    duration_max: Array
+    final_time_min: float
+    final_time_max: float
+    def __init__(self, u_min: ArrayLike = ..., u_max: ArrayLike = ...,
+                 duration_min: ArrayLike = ..., duration_max: ArrayLike = ...,
+                 final_time_min: float = 0.0, final_time_max: float = ...) -> None: ...
+    def fix_final_time(self, t_final: float) -> None: ...
+    @property
+    def final_time_bounded(self) -> bool: ...
+
+class System:
+    """A switched system (f_k, g_k, h_k), evaluated with the engine's checks."""
+    @property
+    def num_modes(self) -> int: ...
+    @property
+    def input_dim(self) -> int: ...
+    def state_dim(self, k: int) -> int: ...
+    def surface_dim(self, k: int) -> int: ...
+    def flow(self, k: int, x: ArrayLike, u: ArrayLike) -> Array: ...
+    def flow_derivatives(self, k: int, x: ArrayLike, u: ArrayLike) -> Tuple[Array, Array]: ...
+    def reset(self, k: int, x: ArrayLike) -> Array: ...
+
+class LinearSystem(System):
+    """xdot = A_k x + B_k u, x+ = E_k x; entirely in C++. B None: m = 0; E None: identity."""
+    def __init__(self, A: Sequence[ArrayLike], B: Optional[Sequence[ArrayLike]] = None,
+                 E: Optional[Sequence[ArrayLike]] = None) -> None: ...
+
+class CallbackSystem(System):
+    """A switched system of Python callables; missing derivatives by central differences."""
+    def __init__(self, state_dims: Sequence[int], input_dim: int,
+                 flow: Callable[[int, Array, Array], ArrayLike],
+                 reset: Optional[Callable[[int, Array], ArrayLike]] = None,
+                 flow_derivatives: Optional[Callable[[int, Array, Array],
+                                                     Tuple[ArrayLike, ArrayLike]]] = None,
+                 reset_derivative: Optional[Callable[[int, Array], ArrayLike]] = None,
+                 surface_dims: Sequence[int] = ...,
+                 surface: Optional[Callable[[int, Array], ArrayLike]] = None,
+                 surface_derivative: Optional[Callable[[int, Array], ArrayLike]] = None,
+                 cycle_reset: bool = False, fd_step: float = 1e-6) -> None: ...
+
+class Cost:
+    """Running costs l_k(x, u) and switching costs phi_k(x)."""
+    def running(self, k: int, x: ArrayLike, u: ArrayLike) -> float: ...
+    def switching(self, k: int, x: ArrayLike) -> float: ...
+
+class QuadraticCost(Cost):
+    """l_k = 1/2 (x-r_k)'Q_k(x-r_k) + 1/2 u'R_k u + rho_k, phi_k = 1/2 (x-s_k)'S_k(x-s_k)."""
+    def __init__(self, Q: Sequence[ArrayLike], R: Sequence[ArrayLike],
+                 S: Optional[Sequence[ArrayLike]] = None, r: Optional[Sequence[ArrayLike]] = None,
+                 s: Optional[Sequence[ArrayLike]] = None,
+                 rho: Optional[Sequence[float]] = None) -> None: ...
+
+class CallbackCost(Cost):
+    """A cost of Python callables; missing derivatives by central differences."""
+    def __init__(self, running: Callable[[int, Array, Array], float],
+                 switching: Optional[Callable[[int, Array], float]] = None,
+                 running_derivatives: Optional[Callable[[int, Array, Array], Tuple[
+                     ArrayLike, ArrayLike, ArrayLike, ArrayLike, ArrayLike]]] = None,
+                 switching_derivatives: Optional[Callable[[int, Array],
+                                                          Tuple[ArrayLike, ArrayLike]]] = None,
+                 fd_step: float = 1e-6, fd_hessian_step: float = 1e-4) -> None: ...
+
+class Problem:
+    """The problem (9)-(10); validates on construction (ValueError)."""
+    bounds: Bounds
+    surface_weights: Array
+    def __init__(self, system: System, cost: Cost, bounds: Bounds,
+                 surface_weights: Optional[ArrayLike] = None) -> None: ...
+    @property
+    def num_modes(self) -> int: ...
+    @property
+    def input_dim(self) -> int: ...
+    def validate(self) -> None: ...
+
+class BackwardEquation(Enum):
+    LYAPUNOV = ...
+    RICCATI = ...
+
+class BackwardIntegrator(Enum):
+    MIDPOINT = ...
+    RK4 = ...
+
+class BackwardPassSettings:
+    equation: BackwardEquation
+    integrator: BackwardIntegrator
+    cyclic_value: float
+    terminal_event: bool
+    box_aware: bool
+    time_curvature: bool
+    use_previous_du: bool
+    psd_switching_hessians: bool
+    max_substeps: int
+    def __init__(self) -> None: ...
+
+class SwitchingTimeSettings:
+    relative_regularization: float
+    max_duration_step: float
+    def __init__(self) -> None: ...
+
+class OnlineControllerSettings:
+    interpolate: bool
+    warm_start: bool
+    def __init__(self) -> None: ...
+
+class Acceptance(Enum):
+    SUFFICIENT_DECREASE = ...
+    PREDICTED_DECREASE = ...
+
+class AlphaAfterAccept(Enum):
+    RESET = ...
+    GROW = ...
+    RATIO = ...
+
+class LearnerSettings:
+    """LearnerSettings() is the 'default' preset; LearnerSettings.paper() the 'paper' one."""
+    acceptance: Acceptance
+    c: float
+    gamma: float
+    interpolate_backtracking: bool
+    alpha_initial: float
+    alpha_after_accept: AlphaAfterAccept
+    alpha_min: float
+    convergence_tolerance: float
+    step_convergence: bool
+    epsilon: float
+    delta_i: int
+    optimality_tolerance: float
+    regularization_min: float
+    max_trials: int
+    max_samples: int
+    backward: BackwardPassSettings
+    switching: SwitchingTimeSettings
+    controller: OnlineControllerSettings
+    def __init__(self) -> None: ...
+    @staticmethod
+    def paper() -> LearnerSettings: ...
+    @staticmethod
+    def preset(name: str) -> LearnerSettings: ...
+
+class ModeTrajectory:
+    t: Array  # (N,)
+    x: Array  # (n_k, N)
+    u: Array  # (m, N)
+
+class Trajectory:
+    modes: List[ModeTrajectory]
+    T: Array
+    x0: Array
+
+class SolveResult:
+    status: str  # 'converged', 'line_search_failed' or 'max_trials'
+    trials: int
+    iterations: int
+    cost: float
+    T: Array
+    optimality: float
+    optimality_inputs: float
+    optimality_times: float
+    cost_history: Array
+    interrupted: bool
+
+class Learner:
+    """Algorithm 1 on a Problem."""
+    def __init__(self, problem: Problem, settings: LearnerSettings = ...) -> None: ...
+    def solve(self, x0: ArrayLike, durations: ArrayLike,
+              u0: Union[None, ArrayLike, Callable[[int, float, Array], ArrayLike]] = None,
+              plant: Optional[System] = None, method: str = "alg1", dt: float = 1e-3,
+              progress: Optional[Callable[[Dict[str, Any]], None]] = None) -> SolveResult: ...
+    @property
+    def nominal(self) -> Trajectory: ...
+    @property
+    def status(self) -> str: ...
+    @property
+    def trials(self) -> int: ...
+    @property
+    def iteration(self) -> int: ...
+    @property
+    def settings(self) -> LearnerSettings: ...
+
+
+def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
+               seconds: Optional[float] = None, robot: str = "", model_mjcf: str = "",
+               pushes: Sequence[str] = ..., no_pushes: bool = False) -> Dict[str, Any]:
+    """Runs a ddoc-hopper scenario (built with the MuJoCo application only); the columns of
+    hops.csv as NumPy arrays plus method, fell, fall_reason, sim_time."""
+    ...

@@ -1,0 +1,91 @@
+"""Poses the standard problems of tests/core/standard_problems.h from Python.
+
+The numbers come from the C++ data (ddoc_testing.data); the problem is built here with the
+public Python API: LinearSystem + QuadraticCost from matrices, or CallbackSystem with Python
+callables (fishing, exp1), and the suite's bounds (durations in [0.01, T], or [T, T] for K = 1,
+the final time fixed).
+"""
+import math
+
+import numpy as np
+
+import ddoc
+import ddoc_testing
+
+MIN_DURATION = 0.01  # kMinDuration of standard_problems.cc
+
+
+def suite_bounds(num_modes, u_min, u_max, final_time):
+    d_min = final_time if num_modes == 1 else MIN_DURATION
+    bounds = ddoc.Bounds(u_min=u_min, u_max=u_max,
+                         duration_min=np.full(num_modes, d_min),
+                         duration_max=np.full(num_modes, final_time))
+    bounds.fix_final_time(final_time)
+    return bounds
+
+
+def fishing_system(d):
+    c0, c1, w = d["c0"], d["c1"], d["fishing"]
+
+    def flow(k, x, u):
+        return [x[0] - x[0] * x[1] - c0 * x[0] * w[k], -x[1] + x[0] * x[1] - c1 * x[1] * w[k]]
+
+    def flow_derivatives(k, x, u):
+        fx = [[1 - x[1] - c0 * w[k], -x[0]], [x[1], -1 + x[0] - c1 * w[k]]]
+        return np.array(fx), np.zeros((2, 0))
+
+    return ddoc.CallbackSystem([2] * len(w), 0, flow, flow_derivatives=flow_derivatives)
+
+
+def exp1_flow(k, x, u):
+    v = u[0]
+    if k == 0:
+        return [x[0] + v * math.sin(x[0]), -x[1] - v * math.cos(x[1])]
+    if k == 1:
+        return [x[1] + v * math.sin(x[1]), -x[0] - v * math.cos(x[0])]
+    return [-x[0] - v * math.sin(x[0]), x[1] + v * math.cos(x[1])]
+
+
+def exp1_flow_derivatives(k, x, u):
+    v = u[0]
+    s0, c0 = math.sin(x[0]), math.cos(x[0])
+    s1, c1 = math.sin(x[1]), math.cos(x[1])
+    if k == 0:
+        return np.array([[1 + v * c0, 0], [0, -1 + v * s1]]), np.array([[s0], [-c1]])
+    if k == 1:
+        return np.array([[0, 1 + v * c1], [-1 + v * s0, 0]]), np.array([[s1], [-c0]])
+    return np.array([[-1 - v * c0, 0], [0, 1 - v * s1]]), np.array([[-s0], [c1]])
+
+
+def exp1_cost(d):
+    t = d["target"]
+    return ddoc.QuadraticCost(Q=[np.eye(2)] * 3, R=[np.eye(1)] * 3,
+                              S=[np.zeros((2, 2)), np.zeros((2, 2)), np.eye(2)],
+                              r=[t] * 3, s=[t] * 3, rho=[0.0] * 3)
+
+
+def pose(name, exact_derivatives=True):
+    """(problem, x0, initial durations, data) of the named standard problem."""
+    d = ddoc_testing.data(name)
+    T = d["final_time"]
+    if d["kind"] == "lq":
+        K = len(d["A"])
+        system = ddoc.LinearSystem(d["A"], d["B"], d["E"])
+        cost = ddoc.QuadraticCost(Q=d["Q"], R=d["R"], S=d["S"], r=d["r"], s=d["s"], rho=d["rho"])
+        bounds = suite_bounds(K, d["u_min"], d["u_max"], T)
+    elif name == "fishing":
+        K = len(d["fishing"])
+        system = fishing_system(d)
+        cost = ddoc.QuadraticCost(Q=[2 * d["weight"] * np.eye(2)] * K,
+                                  R=[np.zeros((0, 0))] * K, S=[np.zeros((2, 2))] * K,
+                                  r=[np.ones(2)] * K, s=[np.zeros(2)] * K, rho=[0.0] * K)
+        bounds = suite_bounds(K, [], [], T)
+    elif name == "exp1":
+        system = ddoc.CallbackSystem(
+            [2, 2, 2], 1, exp1_flow,
+            flow_derivatives=exp1_flow_derivatives if exact_derivatives else None)
+        cost = exp1_cost(d)
+        bounds = suite_bounds(3, [-np.inf], [np.inf], T)
+    else:
+        raise ValueError(f"unknown problem {name}")
+    return ddoc.Problem(system, cost, bounds), d["x0"], d["initial_durations"], d
