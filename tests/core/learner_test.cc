@@ -4,6 +4,7 @@
 // optimum the test computes independently (Riccati for every pair of durations on a dense grid),
 // data-driven vs model-based on an inexact model, and the incremental (one trial at a time) API.
 #include <cmath>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -458,6 +459,65 @@ TEST(Learner, ConvergedLqrGainIsTheExactOne) {
   }
   const double J = 0.5 * x0.dot(P_ref[0] * x0);
   EXPECT_NEAR(r.cost, J, 1e-4 * J);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// The line search's acceptance test must ask for a sufficient decrease, not any decrease. A probe
+// runs the first trial of the two-mode LQ problem (it does not depend on c) and measures its
+// decrease, predicted change and step; learners with c set from the probe then face the same
+// trial: with c twice the measured ratio the trial decreased the cost but not enough (rejected,
+// alpha shrinks), with half of it the trial is accepted. Both presets: Armijo on the predicted
+// change (default, decrease <= c * predicted) and the paper's (36) (decrease <= -c * step).
+TEST(Learner, LineSearchTellsSufficientDecreaseFromAnyDecrease) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  for (const Preset preset : {Preset::kDefault, Preset::kPaper}) {
+    const char* name = preset == Preset::kDefault ? "default" : "paper";
+    auto first_trial = [&](double c) {
+      LearnerSettings settings = PresetSettings(preset);
+      settings.c = c;
+      settings.max_samples = 10000;
+      Learner learner(p.problem, settings);
+      FunctionPolicy initial = ZeroInputPolicy();
+      Trajectory measured;
+      plant.Run(lq.x0, initial, &measured);
+      learner.Initialize(measured);
+      const double alpha = learner.alpha();
+      plant.Run(lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      return std::make_tuple(r, alpha, learner.alpha(), learner.iteration());
+    };
+    const TrialResult probe = std::get<0>(first_trial(1e-4));
+    ASSERT_LT(probe.decrease, 0.0) << name;
+    ASSERT_GT(probe.step, 0.0) << name;
+    ASSERT_LT(probe.predicted, 0.0) << name;
+    // The ratio of the measured decrease to what the acceptance test multiplies by c.
+    const double ratio = preset == Preset::kDefault ? probe.decrease / probe.predicted
+                                                    : -probe.decrease / probe.step;
+    ASSERT_GT(ratio, 1e-3) << name;
+    {
+      const auto [r, alpha_before, alpha_after, iteration] = first_trial(2.0 * ratio);
+      EXPECT_DOUBLE_EQ(r.decrease, probe.decrease) << name << ": not the same trial";
+      EXPECT_LT(r.decrease, 0.0) << name;
+      EXPECT_FALSE(r.accepted) << name << ": a decrease of half the required one was accepted";
+      EXPECT_LT(alpha_after, alpha_before) << name;
+      EXPECT_EQ(iteration, 0) << name;
+    }
+    {
+      const auto [r, alpha_before, alpha_after, iteration] = first_trial(0.5 * ratio);
+      EXPECT_DOUBLE_EQ(r.decrease, probe.decrease) << name << ": not the same trial";
+      EXPECT_TRUE(r.accepted) << name << ": twice the required decrease was rejected";
+      EXPECT_EQ(iteration, 1) << name;
+    }
+  }
 }
 
 }  // namespace
