@@ -16,6 +16,17 @@ def listed_names(stdout):
             if line.strip() and not line.startswith(" ")]
 
 
+def load_mutate():
+    """tools/mutate as a module (it has no .py suffix)."""
+    import importlib.machinery
+    import importlib.util
+    loader = importlib.machinery.SourceFileLoader("mutate_under_test", MUTATE)
+    spec = importlib.util.spec_from_loader("mutate_under_test", loader)
+    mod = importlib.util.module_from_spec(spec)
+    loader.exec_module(mod)
+    return mod
+
+
 class MutateCheckTest(unittest.TestCase):
     def test_every_mutant_applies_to_the_tree(self):
         p = run_tool("mutate", "--check")
@@ -53,14 +64,8 @@ class MutateCheckTest(unittest.TestCase):
         self.assertNotEqual(bad.returncode, 0)
 
     def test_check_fails_when_a_snippet_is_missing(self):
-        # The check must be able to fail: run it against a copy of the list's module with one
-        # snippet changed so that it is no longer in the tree.
-        import importlib.machinery
-        import importlib.util
-        loader = importlib.machinery.SourceFileLoader("mutate_under_test", MUTATE)
-        spec = importlib.util.spec_from_loader("mutate_under_test", loader)
-        mod = importlib.util.module_from_spec(spec)
-        loader.exec_module(mod)
+        # The check must be able to fail: one snippet changed so that it is no longer in the tree.
+        mod = load_mutate()
         self.assertEqual(mod.check(mod.MUTANTS), [])
         broken = mod.MUTANTS[0]._replace(original=mod.MUTANTS[0].original + " /* not there */")
         problems = mod.check([broken] + mod.MUTANTS[1:])
@@ -70,6 +75,19 @@ class MutateCheckTest(unittest.TestCase):
         self.assertTrue(any("times" in x for x in mod.check([twice])))
         dup = mod.check([mod.MUTANTS[2], mod.MUTANTS[2]])
         self.assertTrue(any("duplicate" in x for x in dup))
+
+    def test_reads_failed_tests_from_ctest_output(self):
+        mod = load_mutate()
+        out = ("50% tests passed, 3 tests failed out of 6\n\nThe following tests FAILED:\n"
+               "\t 32 - core.BackwardPassJump.PAndGains (Failed)\n"
+               "\t 80 - core.A/B.C/4-byte object <00-00 00-00> (Timeout)\n"
+               "\t 97 - core.Suite/E.R/exp0  # GetParam() = \"exp0\" (Failed)\n"
+               "Errors while running CTest\n")
+        self.assertEqual(mod.failed_tests(out),
+                         [("core.BackwardPassJump.PAndGains", "Failed"),
+                          ("core.A/B.C/4-byte object <00-00 00-00>", "Timeout"),
+                          ("core.Suite/E.R/exp0", "Failed")])
+        self.assertEqual(mod.failed_tests("100% tests passed, 0 tests failed out of 6\n"), [])
 
     def test_is_executable(self):
         self.assertTrue(os.access(MUTATE, os.X_OK), "tools/mutate is not executable")
