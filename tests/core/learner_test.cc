@@ -523,3 +523,92 @@ TEST(Learner, LineSearchTellsSufficientDecreaseFromAnyDecrease) {
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// The step test of Algorithm 1 (paper preset, step_convergence): with the gradient guard
+// disabled (optimality_tolerance huge), convergence is decided by int |du|^2 + |dT|^2 <= epsilon
+// alone. An epsilon below every step never converges; one above every step converges after
+// delta_i accepted trials. And the Levenberg-Marquardt regularization is back on its floor after
+// an accepted trial (it only grows when a backward pass fails).
+TEST(Learner, StepTestDecidesConvergenceAndRegularizationShrinksOnAcceptance) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  for (const double epsilon : {1e-30, 1e30}) {
+    LearnerSettings settings = LearnerSettings::Paper();
+    settings.optimality_tolerance = 1e30;
+    settings.epsilon = epsilon;
+    settings.delta_i = 2;
+    settings.regularization_min = 1e-3;
+    settings.max_samples = 10000;
+    Learner learner(p.problem, settings);
+    FunctionPolicy initial = ZeroInputPolicy();
+    Trajectory measured;
+    plant.Run(lq.x0, initial, &measured);
+    learner.Initialize(measured);
+    int accepted = 0;
+    for (int trial = 0; trial < 40 && accepted < 4; ++trial) {
+      plant.Run(lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      if (!r.accepted) continue;
+      ++accepted;
+      EXPECT_GT(r.step, 1e-20) << "epsilon " << epsilon;
+      EXPECT_EQ(learner.regularization(), settings.regularization_min) << "trial " << trial;
+      if (epsilon < 1) {
+        EXPECT_EQ(r.status, LearnerStatus::kRunning) << "converged with steps above epsilon";
+      } else {
+        EXPECT_EQ(r.status, accepted >= settings.delta_i ? LearnerStatus::kConverged
+                                                         : LearnerStatus::kRunning)
+            << "accepted " << accepted;
+        if (r.status == LearnerStatus::kConverged) break;
+      }
+    }
+    EXPECT_GE(accepted, 2) << "epsilon " << epsilon;
+  }
+}
+
+// The optimality measure projects the input gradient on the bounds: an input on its upper bound
+// whose gradient asks for more of it contributes nothing. One mode, xdot = u, u <= 1, a terminal
+// cost pulling x(1) to 5: at u = 1 the gradient is D (R u + p) = 0.1 - 40 < 0 everywhere, so the
+// projected measure is 0; at u = 0.5 (interior) it is |gradient| = 40.4 (sqrt(int g^2 dt), D = 1).
+TEST(Learner, OptimalityIgnoresInputsPushedAgainstTheirBounds) {
+  LinearSwitchedSystem sys({Matrix::Zero(1, 1)}, {Matrix::Identity(1, 1)},
+                           {Matrix::Identity(1, 1)});
+  QuadraticCost cost({Matrix::Zero(1, 1)}, {Matrix::Constant(1, 1, 0.1)}, {0.0},
+                     {Matrix::Constant(1, 1, 10.0)}, {Vector::Constant(1, 5.0)});
+  Problem problem;
+  problem.system = &sys;
+  problem.cost = &cost;
+  problem.bounds.u_min = Vector::Constant(1, -1);
+  problem.bounds.u_max = Vector::Constant(1, 1);
+  problem.bounds.duration_min = Vector::Constant(1, 0.1);
+  problem.bounds.duration_max = Vector::Constant(1, 5);
+  problem.surface_weights = Vector::Zero(1);
+  for (const double u : {1.0, 0.5}) {
+    const int N = 21;
+    Trajectory traj;
+    traj.modes.resize(1);
+    traj.modes[0].t = Vector::LinSpaced(N, 0.0, 1.0);
+    traj.modes[0].x = u * traj.modes[0].t.transpose();
+    traj.modes[0].u = Matrix::Constant(1, N, u);
+    traj.T = Vector::Constant(1, 1.0);
+    traj.x0 = Vector::Zero(1);
+    BackwardPass pass;
+    pass.Allocate(problem, N, BackwardPassSettings{});
+    ASSERT_TRUE(pass.Run(traj));
+    const Optimality o = ComputeOptimality(problem, traj, pass);
+    const double g = 0.1 * u + 10.0 * (u - 5.0);  // R u + S (x(1) - r), p constant
+    if (u == 1.0) {
+      EXPECT_LT(o.inputs, 1e-9) << "an input on its bound, pushed outward, counted";
+    } else {
+      EXPECT_NEAR(o.inputs, std::abs(g), 1e-6 * std::abs(g));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
