@@ -571,9 +571,11 @@ TEST(Learner, StepTestDecidesConvergenceAndRegularizationShrinksOnAcceptance) {
 }
 
 // The optimality measure projects the input gradient on the bounds: an input on its upper bound
-// whose gradient asks for more of it contributes nothing. One mode, xdot = u, u <= 1, a terminal
-// cost pulling x(1) to 5: at u = 1 the gradient is D (R u + p) = 0.1 - 40 < 0 everywhere, so the
-// projected measure is 0; at u = 0.5 (interior) it is |gradient| = 40.4 (sqrt(int g^2 dt), D = 1).
+// whose gradient asks for more of it contributes nothing. One mode of duration D = 2, xdot = u,
+// u <= 1, a terminal cost 1/2 S (x(D) - 5)^2: the gradient per unit time is g = R u + p with the
+// constant adjoint p = S (u D - 5). At u = 1, g = 0.1 - 30 < 0 everywhere, so the projected
+// measure is 0; at u = 0.5 (interior) it is sqrt(int_0^D g^2 dt) = sqrt(D) |g| (the per-tau
+// gradient D g of the pass, with its factor D: mutant bp_gradient_unscaled).
 TEST(Learner, OptimalityIgnoresInputsPushedAgainstTheirBounds) {
   LinearSwitchedSystem sys({Matrix::Zero(1, 1)}, {Matrix::Identity(1, 1)},
                            {Matrix::Identity(1, 1)});
@@ -591,20 +593,21 @@ TEST(Learner, OptimalityIgnoresInputsPushedAgainstTheirBounds) {
     const int N = 21;
     Trajectory traj;
     traj.modes.resize(1);
-    traj.modes[0].t = Vector::LinSpaced(N, 0.0, 1.0);
+    const double D = 2.0;
+    traj.modes[0].t = Vector::LinSpaced(N, 0.0, D);
     traj.modes[0].x = u * traj.modes[0].t.transpose();
     traj.modes[0].u = Matrix::Constant(1, N, u);
-    traj.T = Vector::Constant(1, 1.0);
+    traj.T = Vector::Constant(1, D);
     traj.x0 = Vector::Zero(1);
     BackwardPass pass;
     pass.Allocate(problem, N, BackwardPassSettings{});
     ASSERT_TRUE(pass.Run(traj));
     const Optimality o = ComputeOptimality(problem, traj, pass);
-    const double g = 0.1 * u + 10.0 * (u - 5.0);  // R u + S (x(1) - r), p constant
+    const double g = 0.1 * u + 10.0 * (u * D - 5.0);
     if (u == 1.0) {
       EXPECT_LT(o.inputs, 1e-9) << "an input on its bound, pushed outward, counted";
     } else {
-      EXPECT_NEAR(o.inputs, std::abs(g), 1e-6 * std::abs(g));
+      EXPECT_NEAR(o.inputs, std::sqrt(D) * std::abs(g), 1e-6 * std::abs(g));
     }
   }
 }
