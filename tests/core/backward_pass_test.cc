@@ -506,6 +506,7 @@ TEST(BackwardPass, RiccatiIsBoxAware) {
   for (int j = 0; j < 240; ++j) {
     ASSERT_LT(box.Feedforward(0, j)(0), 0.0) << "the gradient pushes u above u_max at j " << j;
     EXPECT_EQ(box.Step(0, j)(0), 0.0) << "j " << j;
+    EXPECT_EQ(box.Gain(0, j).norm(), 0.0) << "the clamped input keeps feedback at j " << j;
   }
   for (int j : {0, 120, 239}) {
     EXPECT_NEAR(box.P(0, j)(0, 0), lyapunov.P(0, j)(0, 0), 1e-12 * lyapunov.P(0, j)(0, 0));
@@ -518,6 +519,7 @@ TEST(BackwardPass, RiccatiIsBoxAware) {
   riccati.Run(traj);
   EXPECT_GT(lyapunov.P(0, 0)(0, 0) - riccati.P(0, 0)(0, 0), 0.5 * riccati.P(0, 0)(0, 0));
   EXPECT_LT(riccati.predicted_linear(), 0.0);
+  EXPECT_GT(riccati.Gain(0, 120).leftCols(1).norm(), 0.1);  // the free input has feedback
 }
 
 TEST(BackwardPass, RegularizationEntersAsMu) {

@@ -4,6 +4,7 @@
 // optimum the test computes independently (Riccati for every pair of durations on a dense grid),
 // data-driven vs model-based on an inexact model, and the incremental (one trial at a time) API.
 #include <cmath>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -434,6 +435,157 @@ TEST(Learner, ConvergedLqrGainIsTheExactOne) {
   }
   const double J = 0.5 * x0.dot(P_ref[0] * x0);
   EXPECT_NEAR(r.cost, J, 1e-4 * J);
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// The line search's acceptance test must ask for a sufficient decrease, not any decrease. A probe
+// runs the first trial of the two-mode LQ problem (it does not depend on c) and measures its
+// decrease, predicted change and step; learners with c set from the probe then face the same
+// trial: with c twice the measured ratio the trial decreased the cost but not enough (rejected,
+// alpha shrinks), with half of it the trial is accepted. Both presets: Armijo on the predicted
+// change (default, decrease <= c * predicted) and the paper's (36) (decrease <= -c * step).
+TEST(Learner, LineSearchTellsSufficientDecreaseFromAnyDecrease) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  for (const Preset preset : {Preset::kDefault, Preset::kPaper}) {
+    const char* name = preset == Preset::kDefault ? "default" : "paper";
+    auto first_trial = [&](double c) {
+      LearnerSettings settings = PresetSettings(preset);
+      settings.c = c;
+      settings.max_samples = 10000;
+      Learner learner(p.problem, settings);
+      FunctionPolicy initial = ZeroInputPolicy();
+      Trajectory measured;
+      plant.Run(lq.x0, initial, &measured);
+      learner.Initialize(measured);
+      const double alpha = learner.alpha();
+      plant.Run(lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      return std::make_tuple(r, alpha, learner.alpha(), learner.iteration());
+    };
+    const TrialResult probe = std::get<0>(first_trial(1e-4));
+    ASSERT_LT(probe.decrease, 0.0) << name;
+    ASSERT_GT(probe.step, 0.0) << name;
+    ASSERT_LT(probe.predicted, 0.0) << name;
+    // The ratio of the measured decrease to what the acceptance test multiplies by c.
+    const double ratio = preset == Preset::kDefault ? probe.decrease / probe.predicted
+                                                    : -probe.decrease / probe.step;
+    ASSERT_GT(ratio, 1e-3) << name;
+    {
+      const auto [r, alpha_before, alpha_after, iteration] = first_trial(2.0 * ratio);
+      EXPECT_DOUBLE_EQ(r.decrease, probe.decrease) << name << ": not the same trial";
+      EXPECT_LT(r.decrease, 0.0) << name;
+      EXPECT_FALSE(r.accepted) << name << ": a decrease of half the required one was accepted";
+      EXPECT_LT(alpha_after, alpha_before) << name;
+      EXPECT_EQ(iteration, 0) << name;
+    }
+    {
+      const auto [r, alpha_before, alpha_after, iteration] = first_trial(0.5 * ratio);
+      EXPECT_DOUBLE_EQ(r.decrease, probe.decrease) << name << ": not the same trial";
+      EXPECT_TRUE(r.accepted) << name << ": twice the required decrease was rejected";
+      EXPECT_EQ(iteration, 1) << name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace testing
+}  // namespace ddoc
+
+namespace ddoc {
+namespace testing {
+namespace {
+
+// The step test of Algorithm 1 (paper preset, step_convergence): with the gradient guard
+// disabled (optimality_tolerance huge), convergence is decided by int |du|^2 + |dT|^2 <= epsilon
+// alone. An epsilon below every step never converges; one above every step converges after
+// delta_i accepted trials. And the Levenberg-Marquardt regularization is back on its floor after
+// an accepted trial (it only grows when a backward pass fails).
+TEST(Learner, StepTestDecidesConvergenceAndRegularizationShrinksOnAcceptance) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  for (const double epsilon : {1e-30, 1e30}) {
+    LearnerSettings settings = LearnerSettings::Paper();
+    settings.optimality_tolerance = 1e30;
+    settings.epsilon = epsilon;
+    settings.delta_i = 2;
+    settings.regularization_min = 1e-3;
+    settings.max_samples = 10000;
+    Learner learner(p.problem, settings);
+    FunctionPolicy initial = ZeroInputPolicy();
+    Trajectory measured;
+    plant.Run(lq.x0, initial, &measured);
+    learner.Initialize(measured);
+    int accepted = 0;
+    for (int trial = 0; trial < 40 && accepted < 4; ++trial) {
+      plant.Run(lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      if (!r.accepted) continue;
+      ++accepted;
+      EXPECT_GT(r.step, 1e-20) << "epsilon " << epsilon;
+      EXPECT_EQ(learner.regularization(), settings.regularization_min) << "trial " << trial;
+      if (epsilon < 1) {
+        EXPECT_EQ(r.status, LearnerStatus::kRunning) << "converged with steps above epsilon";
+      } else {
+        EXPECT_EQ(r.status, accepted >= settings.delta_i ? LearnerStatus::kConverged
+                                                         : LearnerStatus::kRunning)
+            << "accepted " << accepted;
+        if (r.status == LearnerStatus::kConverged) break;
+      }
+    }
+    EXPECT_GE(accepted, 2) << "epsilon " << epsilon;
+  }
+}
+
+// The optimality measure projects the input gradient on the bounds: an input on its upper bound
+// whose gradient asks for more of it contributes nothing. One mode of duration D = 2, xdot = u,
+// u <= 1, a terminal cost 1/2 S (x(D) - 5)^2: the gradient per unit time is g = R u + p with the
+// constant adjoint p = S (u D - 5). At u = 1, g = 0.1 - 30 < 0 everywhere, so the projected
+// measure is 0; at u = 0.5 (interior) it is sqrt(int_0^D g^2 dt) = sqrt(D) |g| (the per-tau
+// gradient D g of the pass, with its factor D: mutant bp_gradient_unscaled).
+TEST(Learner, OptimalityIgnoresInputsPushedAgainstTheirBounds) {
+  LinearSwitchedSystem sys({Matrix::Zero(1, 1)}, {Matrix::Identity(1, 1)},
+                           {Matrix::Identity(1, 1)});
+  QuadraticCost cost({Matrix::Zero(1, 1)}, {Matrix::Constant(1, 1, 0.1)}, {0.0},
+                     {Matrix::Constant(1, 1, 10.0)}, {Vector::Constant(1, 5.0)});
+  Problem problem;
+  problem.system = &sys;
+  problem.cost = &cost;
+  problem.bounds.u_min = Vector::Constant(1, -1);
+  problem.bounds.u_max = Vector::Constant(1, 1);
+  problem.bounds.duration_min = Vector::Constant(1, 0.1);
+  problem.bounds.duration_max = Vector::Constant(1, 5);
+  problem.surface_weights = Vector::Zero(1);
+  for (const double u : {1.0, 0.5}) {
+    const int N = 21;
+    Trajectory traj;
+    traj.modes.resize(1);
+    const double D = 2.0;
+    traj.modes[0].t = Vector::LinSpaced(N, 0.0, D);
+    traj.modes[0].x = u * traj.modes[0].t.transpose();
+    traj.modes[0].u = Matrix::Constant(1, N, u);
+    traj.T = Vector::Constant(1, D);
+    traj.x0 = Vector::Zero(1);
+    BackwardPass pass;
+    pass.Allocate(problem, N, BackwardPassSettings{});
+    ASSERT_TRUE(pass.Run(traj));
+    const Optimality o = ComputeOptimality(problem, traj, pass);
+    const double g = 0.1 * u + 10.0 * (u * D - 5.0);
+    if (u == 1.0) {
+      EXPECT_LT(o.inputs, 1e-9) << "an input on its bound, pushed outward, counted";
+    } else {
+      EXPECT_NEAR(o.inputs, std::sqrt(D) * std::abs(g), 1e-6 * std::abs(g));
+    }
+  }
 }
 
 }  // namespace

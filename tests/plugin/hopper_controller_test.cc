@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 #include <memory>
@@ -287,6 +288,59 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   for (const HopReport& r : reports) accepted += r.hop >= rig.c().config().driver.warmup_trials && r.accepted;
   EXPECT_GE(accepted, 2);
   EXPECT_LT(rig.c().learner()->nominal_cost(), 0.25 * initial);
+}
+
+TEST(HopperControllerTest, DefaultScenarioSurvivesTwelveHopsWithBoundedApexPitchSpeedAndCost) {
+  // The default scenario (models/scenarios/default.xml: the 10 kg drag-free model on the 8 kg
+  // robot with drag, 0.5 m/s) for 12 hops, enough to see a fall: a law that is wrong (no state
+  // feedback, a broken jump term, a bad line search) keeps the inputs in bounds but falls within
+  // a few hops or hops far worse. Measured on this tree (Release, issue 23), per hop:
+  //   apex 0.773-0.790 m, max |pitch| 0.027-0.043 rad, speed 0.54-0.58 m/s in the learning hops,
+  //   cost 1.5 / 12.9 / 22.3 in the 3 warm-up hops (the model's law on the lighter robot),
+  //   1.08-3.30 in the learning hops, 1.08-1.10 in the last four.
+  // Bounds: the measured range with margin: apex 0.73-0.84 m, pitch < 0.1 rad (2.3x), speed
+  // 0.40-0.75 m/s, warm-up cost < 30, learning-hop cost < 6.6 (2x the worst), mean of the last
+  // four < 2.2 (2x): the learner must have brought the cost down to a tenth of the last warm-up.
+  constexpr double APEX_LO = 0.73, APEX_HI = 0.84, PITCH_HI = 0.1, WARM_COST_HI = 30.0,
+                   SPEED_LO = 0.40, SPEED_HI = 0.75, COST_HI = 6.6, LAST_COST_HI = 2.2;
+  Robot rig("hopper_m8.xml", ControllerConfig(), false);
+  ASSERT_TRUE(rig.ok());
+  const int hops = 12;
+  const int warmup = rig.c().config().driver.warmup_trials;
+  const int pitch_q = rig.c().mapping().qpos_pitch;
+  std::vector<HopReport> reports;
+  std::vector<double> pitch(1, 0.0);  // max |pitch| of each hop
+  while (static_cast<int>(reports.size()) < hops && rig.d()->time < 12.0) {
+    rig.Step();
+    pitch.back() = std::max(pitch.back(), std::abs(rig.d()->qpos[pitch_q]));
+    for (const HopReport& r : rig.c().TakeReports()) {
+      reports.push_back(r);
+      pitch.push_back(0.0);
+    }
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  for (size_t i = 0; i < reports.size(); ++i) {
+    const HopReport& r = reports[i];
+    std::printf("hop %2d  apex %.4f  pitch %.4f  speed %.4f  cost %.4f  accepted %d\n", r.hop,
+                r.apex, pitch[i], r.speed, r.cost, static_cast<int>(r.accepted));
+  }
+  ASSERT_EQ(reports.size(), static_cast<size_t>(hops)) << "fell or stopped hopping";
+  for (int i = 0; i < hops; ++i) {
+    const HopReport& r = reports[i];
+    EXPECT_GT(r.apex, APEX_LO) << "hop " << i;
+    EXPECT_LT(r.apex, APEX_HI) << "hop " << i;
+    EXPECT_LT(pitch[i], PITCH_HI) << "hop " << i;
+    if (i < warmup) {
+      EXPECT_LT(r.cost, WARM_COST_HI) << "warm-up hop " << i;
+    } else {
+      EXPECT_GT(r.speed, SPEED_LO) << "hop " << i;
+      EXPECT_LT(r.speed, SPEED_HI) << "hop " << i;
+      EXPECT_LT(r.cost, COST_HI) << "learning hop " << i;
+    }
+  }
+  double last = 0;
+  for (int i = hops - 4; i < hops; ++i) last += reports[i].cost / 4;
+  EXPECT_LT(last, LAST_COST_HI) << "mean cost of the last four hops";
 }
 
 TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {

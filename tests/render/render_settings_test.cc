@@ -108,15 +108,24 @@ TEST_F(RenderSettingsTest, RejectsDirectoryUnderARegularFile) {
 }
 
 TEST_F(RenderSettingsTest, RejectsReadOnlyDirectory) {
-  if (::geteuid() == 0) GTEST_SKIP() << "root can write into a 0555 directory";
-  fs::create_directories(dir_ / "ro");
-  ::chmod((dir_ / "ro").c_str(), 0555);
+  // Root writes into a 0555 directory, and the suite runs as root on our machines and in CI; the
+  // read-only directory is then /proc/self, a directory in which no process, root included, can
+  // create a file or a subdirectory.
+  const bool root = ::geteuid() == 0;
+  fs::path ro = dir_ / "ro";
+  if (root) {
+    ro = "/proc/self";
+    ASSERT_TRUE(fs::is_directory(ro)) << "no /proc: no read-only directory to test as root";
+  } else {
+    fs::create_directories(ro);
+    ::chmod(ro.c_str(), 0555);
+  }
   RenderSettings s = Valid();
-  s.dir = (dir_ / "ro").string();
+  s.dir = ro.string();
   ExpectInvalid(s, "is not writable");
-  s.dir = (dir_ / "ro" / "sub").string();
+  s.dir = (ro / "sub").string();
   ExpectInvalid(s, "cannot create output directory");
-  ::chmod((dir_ / "ro").c_str(), 0755);
+  if (!root) ::chmod(ro.c_str(), 0755);
 }
 
 TEST_F(RenderSettingsTest, RecorderCreateFailsBeforeRenderingOnBadSettings) {
