@@ -24,11 +24,18 @@ Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
 /// reference, e.g. the central differences). Throws InvalidArgument when the sizes differ.
 double RelativeError(const ConstMatrixRef& a, const ConstMatrixRef& b);
 
+/// max_ij |a_ij - b_ij| / (abs_tol + rel_tol |b_ij|): each entry against a tolerance of its own
+/// (b the reference); <= 1 when every entry is within it. Unlike RelativeError, a small entry
+/// beside a large one is held to its own size. Throws InvalidArgument when the sizes differ or a
+/// tolerance is negative or both are 0.
+double EntryError(const ConstMatrixRef& a, const ConstMatrixRef& b, double abs_tol, double rel_tol);
+
 /// One checked derivative.
 struct DerivativeError {
   std::string name;          ///< "fx", "fu", "gx", "hx", "lx", "lu", "lxx", "luu", "lux", "phix", "phixx"
   double max_abs_error = 0;  ///< max_ij |analytic - central difference|
   double max_rel_error = 0;  ///< max_abs_error / max(1, max_ij |central difference|)
+  double entry_error = 0;    ///< EntryError with DerivativeCheckSettings' abs/rel tolerances
 };
 
 /// All checked derivatives of one mode at one point.
@@ -40,11 +47,17 @@ struct DerivativeCheckReport {
   double max_rel_error() const;
   /// True when every entry has max_rel_error <= tolerance.
   bool Passed(double tolerance) const { return max_rel_error() <= tolerance; }
+  /// Largest entry_error over all entries.
+  double max_entry_error() const;
+  /// True when every matrix entry is within its own tolerance (max_entry_error() <= 1).
+  bool PassedPerEntry() const { return max_entry_error() <= 1.0; }
 };
 
 /// Settings of CheckDerivatives.
 struct DerivativeCheckSettings {
   double step = 1e-6;  ///< central difference step, scaled by max(1, |x_i|)
+  double abs_tolerance = 1e-6;  ///< per-entry check: absolute part (the differences' rounding)
+  double rel_tolerance = 1e-6;  ///< per-entry check: part relative to the entry
 };
 
 /// Compares the analytic derivatives of `system` (f_x, f_u; g_x when mode k has a reset;

@@ -4,15 +4,21 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
+#include <string>
 
 namespace ddoc {
 namespace {
 
-DerivativeError Compare(const std::string& name, const Matrix& analytic, const Matrix& fd) {
+DerivativeError Compare(const std::string& name, const Matrix& analytic, const Matrix& fd,
+                        const DerivativeCheckSettings& settings) {
   DerivativeError e;
   e.name = name;
   e.max_abs_error = analytic.size() ? (analytic - fd).cwiseAbs().maxCoeff() : 0.0;
   e.max_rel_error = analytic.size() ? RelativeError(analytic, fd) : 0.0;
+  e.entry_error = analytic.size()
+                      ? EntryError(analytic, fd, settings.abs_tolerance, settings.rel_tolerance)
+                      : 0.0;
   return e;
 }
 
@@ -65,6 +71,34 @@ const DerivativeError* DerivativeCheckReport::Find(const std::string& name) cons
   return nullptr;
 }
 
+double EntryError(const ConstMatrixRef& a, const ConstMatrixRef& b, double abs_tol,
+                  double rel_tol) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) {
+    throw InvalidArgument("EntryError: sizes " + std::to_string(a.rows()) + "x" +
+                          std::to_string(a.cols()) + " and " + std::to_string(b.rows()) + "x" +
+                          std::to_string(b.cols()) + " differ");
+  }
+  if (!(abs_tol >= 0.0) || !(rel_tol >= 0.0) || !(abs_tol + rel_tol > 0.0)) {
+    throw InvalidArgument("EntryError: tolerances abs " + std::to_string(abs_tol) + ", rel " +
+                          std::to_string(rel_tol) + ": expected >= 0, not both 0");
+  }
+  double worst = 0;
+  for (Eigen::Index j = 0; j < a.cols(); ++j) {
+    for (Eigen::Index i = 0; i < a.rows(); ++i) {
+      const double tol = abs_tol + rel_tol * std::abs(b(i, j));
+      const double r = std::abs(a(i, j) - b(i, j)) / tol;
+      worst = std::isnan(r) ? std::numeric_limits<double>::infinity() : std::max(worst, r);
+    }
+  }
+  return worst;
+}
+
+double DerivativeCheckReport::max_entry_error() const {
+  double worst = 0;
+  for (const auto& e : entries) worst = std::max(worst, e.entry_error);
+  return worst;
+}
+
 double DerivativeCheckReport::max_rel_error() const {
   double worst = 0;
   for (const auto& e : entries) worst = std::max(worst, e.max_rel_error);
@@ -103,8 +137,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     system.Flow(k, x, uv, f);
     return f;
   };
-  report.entries.push_back(Compare("fx", fx, Fd(flow_x, x)));
-  report.entries.push_back(Compare("fu", fu, Fd(flow_u, u)));
+  report.entries.push_back(Compare("fx", fx, Fd(flow_x, x), settings));
+  report.entries.push_back(Compare("fu", fu, Fd(flow_u, u), settings));
 
   if (k < K - 1 || system.has_cycle_reset()) {
     const int nn = system.state_dim((k + 1) % K);
@@ -115,7 +149,7 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
       system.Reset(k, xv, g);
       return g;
     };
-    report.entries.push_back(Compare("gx", gx, Fd(reset, x)));
+    report.entries.push_back(Compare("gx", gx, Fd(reset, x), settings));
   }
   const int s = system.surface_dim(k);
   if (s > 0) {
@@ -126,7 +160,7 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
       system.Surface(k, xv, h);
       return h;
     };
-    report.entries.push_back(Compare("hx", hx, Fd(surface, x)));
+    report.entries.push_back(Compare("hx", hx, Fd(surface, x), settings));
   }
   if (cost == nullptr) return report;
 
@@ -143,8 +177,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     v(0) = cost->Running(k, x, uv);
     return v;
   };
-  report.entries.push_back(Compare("lx", lx.transpose(), Fd(l_x, x)));
-  report.entries.push_back(Compare("lu", lu.transpose(), Fd(l_u, u)));
+  report.entries.push_back(Compare("lx", lx.transpose(), Fd(l_x, x), settings));
+  report.entries.push_back(Compare("lu", lu.transpose(), Fd(l_u, u), settings));
   // Second derivatives from the analytic gradients.
   auto grad_x_of_x = [&](const Vector& xv) {
     Vector gx(n), gu(m);
@@ -164,9 +198,9 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     cost->RunningDerivatives(k, xv, u, gx, gu, a, b, c);
     return gu;
   };
-  report.entries.push_back(Compare("lxx", lxx, Fd(grad_x_of_x, x)));
-  report.entries.push_back(Compare("luu", luu, Fd(grad_u_of_u, u)));
-  report.entries.push_back(Compare("lux", lux, Fd(grad_u_of_x, x)));
+  report.entries.push_back(Compare("lxx", lxx, Fd(grad_x_of_x, x), settings));
+  report.entries.push_back(Compare("luu", luu, Fd(grad_u_of_u, u), settings));
+  report.entries.push_back(Compare("lux", lux, Fd(grad_u_of_x, x), settings));
 
   Vector phix(n);
   Matrix phixx(n, n);
@@ -182,8 +216,8 @@ DerivativeCheckReport CheckDerivatives(const SwitchedSystem& system, const Switc
     cost->SwitchingDerivatives(k, xv, g, H);
     return g;
   };
-  report.entries.push_back(Compare("phix", phix.transpose(), Fd(phi, x)));
-  report.entries.push_back(Compare("phixx", phixx, Fd(phi_grad, x)));
+  report.entries.push_back(Compare("phix", phix.transpose(), Fd(phi, x), settings));
+  report.entries.push_back(Compare("phixx", phixx, Fd(phi_grad, x), settings));
   return report;
 }
 

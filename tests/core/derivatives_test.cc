@@ -30,6 +30,7 @@ TEST(Derivatives, AutoDiffModelPassesCheckDerivativesInEveryMode) {
       for (const auto& e : report.entries) {
         EXPECT_LT(e.max_rel_error, 1e-7) << "mode " << k << " derivative " << e.name;
       }
+      EXPECT_TRUE(report.PassedPerEntry()) << "mode " << k << ": " << report.max_entry_error();
       // Every expected entry is present.
       for (const char* name : {"fx", "fu", "lx", "lu", "lxx", "luu", "lux", "phix", "phixx"}) {
         EXPECT_NE(report.Find(name), nullptr) << name;
@@ -66,6 +67,23 @@ TEST(Derivatives, CheckDerivativesFlagsAWrongJacobian) {
   EXPECT_NEAR(bad.Find("fx")->max_abs_error, 0.01, 1e-7);
   EXPECT_FALSE(bad.Passed(1e-4));
   EXPECT_TRUE(good.Passed(1e-8));
+}
+
+// A Jacobian with entries of very different sizes (as the hopper's, where stiffness entries
+// reach ~2000): an error of 10 % in a small entry is 5e-8 of the largest one, so the relative
+// error scaled by the whole matrix lets it pass a 1e-6 check; the per-entry check does not.
+TEST(Derivatives, PerEntryToleranceHoldsSmallEntriesToTheirOwnSize) {
+  Matrix exact(2, 2), wrong(2, 2);
+  exact << 2000.0, 1e-3, -0.5, 3.0;
+  wrong = exact;
+  wrong(0, 1) *= 1.1;
+  EXPECT_LT(RelativeError(wrong, exact), 1e-6);
+  EXPECT_GT(EntryError(wrong, exact, 1e-6, 1e-6), 1.0);
+  // An error of the differences' size (1e-9 relative) passes in every entry.
+  Matrix close = exact * (1.0 + 1e-9);
+  EXPECT_LE(EntryError(close, exact, 1e-6, 1e-6), 1.0);
+  ExpectThrowsWith([&] { EntryError(exact, Matrix::Zero(2, 3), 1e-6, 1e-6); }, "sizes");
+  ExpectThrowsWith([&] { EntryError(exact, exact, 0.0, 0.0); }, "tolerances");
 }
 
 class TimeNormalizationTest : public ::testing::TestWithParam<int> {};
