@@ -26,6 +26,7 @@
 
 #include "ddoc/check_derivatives.h"
 #include "ddoc/learner.h"
+#include "ddoc/linear_system.h"
 #include "ddoc/plant.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
@@ -116,98 +117,61 @@ std::string Indexed(const char* what, int k) { return std::string(what) + "(k=" 
 
 // ------------------------------------------------------------------ matrix-given LQ system
 
-std::vector<int> RowsOf(const std::vector<Matrix>& A) {
-  std::vector<int> n;
-  for (const Matrix& a : A) n.push_back(static_cast<int>(a.rows()));
-  return n;
+/// The Python constructor of ddoc::LinearSystem: lists of arrays, B optional (m = 0), E optional
+/// (identities when the state size does not change); errors name the argument and both shapes.
+std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::object& B_in,
+                                             const py::object& E_in) {
+  std::vector<Matrix> A = AsMatrices(A_in, "A");
+  const size_t K = A.size();
+  if (K == 0) throw InvalidArgument("A: expected at least one mode, got an empty list");
+  for (size_t k = 0; k < K; ++k) {
+    if (A[k].rows() != A[k].cols() || A[k].rows() == 0) {
+      throw InvalidArgument("A[" + std::to_string(k) + "]: shape (" +
+                            std::to_string(A[k].rows()) + ", " + std::to_string(A[k].cols()) +
+                            "), expected a square (n_k, n_k) with n_k > 0");
+    }
+  }
+  std::vector<Matrix> B;
+  int m = 0;
+  if (!B_in.is_none()) {
+    const py::list Bl = B_in;
+    if (Bl.size() != K) {
+      throw InvalidArgument("B: " + std::to_string(Bl.size()) + " matrices, expected " +
+                            std::to_string(K) + " (one per mode)");
+    }
+    B.push_back(AsMatrix(Bl[0], "B[0]", A[0].rows(), -1));
+    m = static_cast<int>(B[0].cols());
+    for (size_t k = 1; k < K; ++k) {
+      B.push_back(AsMatrix(Bl[k], "B[" + std::to_string(k) + "]", A[k].rows(), m));
+    }
+  } else {
+    for (size_t k = 0; k < K; ++k) B.push_back(Matrix::Zero(A[k].rows(), 0));
+  }
+  std::vector<Matrix> E;
+  if (!E_in.is_none()) {
+    const py::list El = E_in;
+    if (El.size() != K - 1 && El.size() != K) {
+      throw InvalidArgument("E: " + std::to_string(El.size()) + " matrices, expected " +
+                            std::to_string(K - 1) + " (K - 1 resets) or " + std::to_string(K) +
+                            " (with the cycle reset)");
+    }
+    for (size_t k = 0; k < El.size(); ++k) {
+      E.push_back(AsMatrix(El[k], "E[" + std::to_string(k) + "]", A[(k + 1) % K].rows(),
+                           A[k].rows()));
+    }
+  } else {
+    for (size_t k = 0; k + 1 < K; ++k) {
+      if (A[k].rows() != A[k + 1].rows()) {
+        throw InvalidArgument("E: required when state sizes change (mode " + std::to_string(k) +
+                              " has " + std::to_string(A[k].rows()) + " states, mode " +
+                              std::to_string(k + 1) + " has " + std::to_string(A[k + 1].rows()) +
+                              ")");
+      }
+      E.push_back(Matrix::Identity(A[k].rows(), A[k].rows()));
+    }
+  }
+  return std::make_unique<LinearSystem>(std::move(A), std::move(B), std::move(E));
 }
-
-/// xdot = A_k x + B_k u, x+ = E_k x (k < K-1; E_{K-1}, when given, is the cycle reset).
-class LinearSystem : public SwitchedSystem {
- public:
-  LinearSystem(std::vector<Matrix> A, std::vector<Matrix> B, std::vector<Matrix> E, int m)
-      : SwitchedSystem(RowsOf(A), m, {}, E.size() == A.size()),
-        A_(std::move(A)), B_(std::move(B)), E_(std::move(E)) {}
-
-  static std::unique_ptr<LinearSystem> Make(const py::list& A_in, const py::object& B_in,
-                                            const py::object& E_in) {
-    std::vector<Matrix> A = AsMatrices(A_in, "A");
-    const size_t K = A.size();
-    if (K == 0) throw InvalidArgument("A: expected at least one mode, got an empty list");
-    for (size_t k = 0; k < K; ++k) {
-      if (A[k].rows() != A[k].cols() || A[k].rows() == 0) {
-        throw InvalidArgument("A[" + std::to_string(k) + "]: shape (" +
-                              std::to_string(A[k].rows()) + ", " + std::to_string(A[k].cols()) +
-                              "), expected a square (n_k, n_k) with n_k > 0");
-      }
-    }
-    std::vector<Matrix> B;
-    int m = 0;
-    if (!B_in.is_none()) {
-      const py::list Bl = B_in;
-      if (Bl.size() != K) {
-        throw InvalidArgument("B: " + std::to_string(Bl.size()) + " matrices, expected " +
-                              std::to_string(K) + " (one per mode)");
-      }
-      B.push_back(AsMatrix(Bl[0], "B[0]", A[0].rows(), -1));
-      m = static_cast<int>(B[0].cols());
-      for (size_t k = 1; k < K; ++k) {
-        B.push_back(AsMatrix(Bl[k], "B[" + std::to_string(k) + "]", A[k].rows(), m));
-      }
-    } else {
-      for (size_t k = 0; k < K; ++k) B.push_back(Matrix::Zero(A[k].rows(), 0));
-    }
-    std::vector<Matrix> E;
-    if (!E_in.is_none()) {
-      const py::list El = E_in;
-      if (El.size() != K - 1 && El.size() != K) {
-        throw InvalidArgument("E: " + std::to_string(El.size()) + " matrices, expected " +
-                              std::to_string(K - 1) + " (K - 1 resets) or " + std::to_string(K) +
-                              " (with the cycle reset)");
-      }
-      for (size_t k = 0; k < El.size(); ++k) {
-        E.push_back(AsMatrix(El[k], "E[" + std::to_string(k) + "]", A[(k + 1) % K].rows(),
-                             A[k].rows()));
-      }
-    } else {
-      for (size_t k = 0; k + 1 < K; ++k) {
-        if (A[k].rows() != A[k + 1].rows()) {
-          throw InvalidArgument("E: required when state sizes change (mode " + std::to_string(k) +
-                                " has " + std::to_string(A[k].rows()) + " states, mode " +
-                                std::to_string(k + 1) + " has " + std::to_string(A[k + 1].rows()) +
-                                ")");
-        }
-        E.push_back(Matrix::Identity(A[k].rows(), A[k].rows()));
-      }
-    }
-    return std::make_unique<LinearSystem>(std::move(A), std::move(B), std::move(E), m);
-  }
-
- protected:
-  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
-              VectorRef xdot) const override {
-    xdot.noalias() = A_[k] * x;
-    if (u.size() > 0) xdot.noalias() += B_[k] * u;
-  }
-  void DoFlowDerivatives(int k, const ConstVectorRef&, const ConstVectorRef&, MatrixRef fx,
-                         MatrixRef fu) const override {
-    fx = A_[k];
-    fu = B_[k];
-  }
-  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
-    if (k >= static_cast<int>(E_.size())) throw InvalidArgument(Indexed("Reset", k) + ": no reset");
-    x_next.noalias() = E_[k] * x;
-  }
-  void DoResetDerivative(int k, const ConstVectorRef&, MatrixRef gx) const override {
-    if (k >= static_cast<int>(E_.size())) {
-      throw InvalidArgument(Indexed("ResetDerivative", k) + ": no reset");
-    }
-    gx = E_[k];
-  }
-
- private:
-  std::vector<Matrix> A_, B_, E_;
-};
 
 /// 1/2 (a - c)' M (a - c) without temporaries (c empty: 0).
 double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector& c) {
@@ -824,7 +788,7 @@ class SolveInterrupted(KeyboardInterrupt):
       "xdot = A_k x + B_k u in mode k, x+ = E_k x at the end of mode k < K-1 (E_{K-1}, if given, "
       "is the cycle reset). Runs entirely in C++. B = None: m = 0 (no inputs); E = None: "
       "identity resets (equal state sizes).")
-      .def(py::init(&LinearSystem::Make), py::arg("A"), py::arg("B") = py::none(),
+      .def(py::init(&MakeLinearSystem), py::arg("A"), py::arg("B") = py::none(),
            py::arg("E") = py::none());
 
   py::class_<SwitchedCost>(mod, "Cost", "Running costs l_k(x, u) and switching costs phi_k(x).")

@@ -10,6 +10,7 @@
 #include "ddoc/check_derivatives.h"
 #include "ddoc/cost.h"
 #include "ddoc/learner.h"
+#include "ddoc/linear_system.h"
 #include "ddoc/online_controller.h"
 #include "ddoc/plant.h"
 #include "ddoc/policy.h"

@@ -5,6 +5,8 @@
 #include <limits>
 #include <utility>
 
+#include "ddoc/linear_system.h"
+
 namespace ddoc {
 namespace testing {
 namespace {
@@ -24,39 +26,7 @@ double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector&
   return 0.5 * v;
 }
 
-std::vector<int> StateDims(const LinearQuadraticData& d) {
-  std::vector<int> n;
-  for (int k = 0; k < d.num_modes(); ++k) n.push_back(d.state_dim(k));
-  return n;
-}
 
-/// xdot = A_k x + B_k u, x+ = E_k x (k < K-1): the dynamics of a LinearQuadraticData.
-class LqSystem : public SwitchedSystem {
- public:
-  explicit LqSystem(const LinearQuadraticData& d)
-      : SwitchedSystem(StateDims(d), d.input_dim()), A_(d.A), B_(d.B), E_(d.E) {}
-
- protected:
-  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
-              VectorRef xdot) const override {
-    xdot.noalias() = A_[k] * x;
-    if (u.size() > 0) xdot.noalias() += B_[k] * u;
-  }
-  void DoFlowDerivatives(int k, const ConstVectorRef&, const ConstVectorRef&, MatrixRef fx,
-                         MatrixRef fu) const override {
-    fx = A_[k];
-    fu = B_[k];
-  }
-  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
-    x_next.noalias() = E_.at(k) * x;  // k = K-1 (no cycle reset) throws
-  }
-  void DoResetDerivative(int k, const ConstVectorRef&, MatrixRef gx) const override {
-    gx = E_.at(k);
-  }
-
- private:
-  std::vector<Matrix> A_, B_, E_;  // K n_k x n_k, K n_k x m, K-1 n_{k+1} x n_k
-};
 
 /// l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k,
 /// phi_k = 1/2 (x - s_k)' S_k (x - s_k). Hand-written derivatives.
@@ -200,7 +170,7 @@ void ZeroInput(int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); }
 
 std::unique_ptr<StandardProblem> FromLq(const LinearQuadraticData& d) {
   auto sp = std::make_unique<StandardProblem>();
-  sp->system = std::make_unique<LqSystem>(d);
+  sp->system = std::make_unique<LinearSystem>(d.A, d.B, d.E);
   sp->cost = std::make_unique<QuadraticTrackingCost>(d);
   SetBounds(sp.get(), d.u_min, d.u_max, d.final_time);
   sp->x0 = d.x0;

@@ -9,8 +9,10 @@
 
 #include "ddoc/cost.h"
 #include "ddoc/learner.h"
+#include "ddoc/linear_system.h"
 #include "ddoc/switching_time_update.h"
 #include "test_systems.h"
+#include "test_util.h"
 
 namespace ddoc {
 namespace testing {
@@ -258,6 +260,45 @@ TEST(Validation, SwitchingTimeUpdateRegularizesAndRespectsDurationBounds) {
   const SwitchingTimeStep newton = SolveSwitchingTimeUpdate(b.problem, T, H, p2, 0.5);
   EXPECT_EQ(newton.regularization, 0.0);
   EXPECT_LT((newton.dT - (-0.5 * H.llt().solve(Vector(p2)))).norm(), 1e-10);
+}
+
+
+// ddoc::LinearSystem: the flow, reset and their derivatives are the matrices; every wrong size
+// is named.
+TEST(LinearSystem, EvaluatesItsMatricesAndNamesWrongSizes) {
+  Matrix A0(2, 2), A1(3, 3), B0(2, 1), B1(3, 1), E0(3, 2);
+  A0 << 0, 1, -2, -0.3;
+  A1 = Matrix::Identity(3, 3) * -0.5;
+  B0 << 0, 1;
+  B1 << 1, 0, 2;
+  E0 << 1, 0, 0, 1, 0.5, 0.5;
+  const LinearSystem sys({A0, A1}, {B0, B1}, {E0});
+  EXPECT_EQ(sys.num_modes(), 2);
+  EXPECT_EQ(sys.state_dim(1), 3);
+  EXPECT_EQ(sys.input_dim(), 1);
+  EXPECT_FALSE(sys.has_cycle_reset());
+  const Vector x = (Vector(2) << 0.3, -0.2).finished(), u = Vector::Constant(1, 0.7);
+  Vector xdot(2), xn(3);
+  sys.Flow(0, x, u, xdot);
+  EXPECT_LT((xdot - (A0 * x + B0 * u)).norm(), 1e-15);
+  sys.Reset(0, x, xn);
+  EXPECT_LT((xn - E0 * x).norm(), 1e-15);
+  Matrix fx(2, 2), fu(2, 1);
+  sys.FlowDerivatives(0, x, u, fx, fu);
+  EXPECT_EQ(fx, A0);
+  EXPECT_EQ(fu, B0);
+  ExpectThrowsWith([&] { sys.Reset(1, Vector::Zero(3), xn); }, "no cycle reset");
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0, B1}, {}); }, "0 matrices E");
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0}, {E0}); }, "1 matrices B");
+  ExpectThrowsWith([&] { LinearSystem({Matrix::Zero(2, 3)}, {B0}, {}); }, "A[0] is (2, 3)");
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0, B0}, {E0}); },
+                   "B[1] is (2, 1), expected (3, 1)");
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0, B1}, {E0.transpose()}); },
+                   "E[0] is (2, 3), expected (3, 2)");
+  // No inputs (m = 0) and a cycle reset.
+  const LinearSystem free({A0}, {Matrix::Zero(2, 0)}, {Matrix::Identity(2, 2)});
+  EXPECT_EQ(free.input_dim(), 0);
+  EXPECT_TRUE(free.has_cycle_reset());
 }
 
 }  // namespace
