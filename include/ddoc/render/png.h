@@ -11,11 +11,9 @@ namespace ddoc {
 
 /// Speed/size trade-off of EncodePng.
 enum class PngCompression {
-  /// For video frames: row filter "none" + zlib level 2 (lodepng's own deflate when ddoc
-  /// was built without zlib). Measured on a 640x480 hopper frame: 5 ms, 119 KB (lodepng's
-  /// deflate: 21 ms, 95 KB; lodepng's defaults with the adaptive filter: 35 ms).
+  /// For video frames: row filter "none" + zlib level 2 (lodepng's own deflate without zlib).
   kFast,
-  /// For images kept in the repository: adaptive row filter + zlib level 9 (~80 KB, ~60 ms).
+  /// For images kept in the repository: adaptive row filter + zlib level 9.
   kSmall,
 };
 

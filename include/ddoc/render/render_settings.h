@@ -47,21 +47,14 @@ struct RenderSettings {
   /// lights, so that the floor stays evenly lit wherever the robot goes: a light fixed in
   /// the world (like the hopper MJCF's spotlight at x = 0) leaves the floor dark ~10 m away.
   bool sun_light = true;
-  /// Keep MuJoCo's own tessellation of infinite planes (a 200 x 200 quad grid, lit per
-  /// vertex). Off by default: the renderer substitutes a 48 x 48 grid of the same extent,
-  /// which leaves the texture unchanged, coarsens only the lighting, and halves the time of
-  /// a 640x480 hopper frame (measured: ~9 -> ~4-6 ms CPU).
+  /// Keep MuJoCo's own 200 x 200 tessellation of infinite planes; false (default): a 48 x 48
+  /// grid of the same extent (same texture, coarser lighting; cost in docs/rendering.md).
   bool fine_infinite_planes = false;
-  /// Shadow pass. Off by default: on llvmpipe it costs ~10 ms per 640x480 frame
-  /// (measured: render 8 ms without, 18-20 ms with shadows).
+  /// Shadow pass; default false (its cost on llvmpipe: docs/rendering.md).
   bool shadows = false;
-  /// Mirror reflections on materials with reflectance > 0. Off by default: the hopper's
-  /// floor has reflectance 0.1, and drawing the mirrored scene took a 640x480 hopper frame
-  /// from 8.7 to 15.5 ms (measured, llvmpipe).
+  /// Mirror reflections on materials with reflectance > 0; default false (docs/rendering.md).
   bool reflection = false;
-  /// Multisample anti-aliasing samples of MuJoCo's offscreen buffer (0 = off), in [0, 16].
-  /// Off by default: with llvmpipe, 4 samples doubled the time of a 640x480 hopper frame
-  /// (measured 11 -> 24 ms wall, 16 -> 40 ms CPU). Set 4 for smoother edges.
+  /// Multisample anti-aliasing samples of the offscreen buffer, in [0, 16]; default 0 (off).
   int multisamples = 0;
   /// Spacing in m of grid lines drawn on the floor plane when the model's floor has no
   /// texture of its own (a textured floor, e.g. builtin="checker", is drawn as is).
