@@ -27,6 +27,7 @@
 #include "ddoc/check_derivatives.h"
 #include "ddoc/learner.h"
 #include "ddoc/linear_system.h"
+#include "ddoc/quadratic_cost.h"
 #include "ddoc/plant.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
@@ -173,132 +174,59 @@ std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::o
   return std::make_unique<LinearSystem>(std::move(A), std::move(B), std::move(E));
 }
 
-/// 1/2 (a - c)' M (a - c) without temporaries (c empty: 0).
-double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector& c) {
-  double v = 0;
-  for (int j = 0; j < a.size(); ++j) {
-    const double aj = a(j) - (c.size() > 0 ? c(j) : 0.0);
-    for (int i = 0; i < a.size(); ++i) v += (a(i) - (c.size() > 0 ? c(i) : 0.0)) * M(i, j) * aj;
+/// The Python constructor of ddoc::QuadraticTrackingCost (bound as ddoc.QuadraticCost): S, r, s
+/// and rho optional (zeros); errors name the argument and both shapes.
+std::unique_ptr<QuadraticTrackingCost> MakeQuadraticCost(const py::list& Q_in, const py::list& R_in,
+                                                       const py::object& S_in, const py::object& r_in,
+                                                       const py::object& s_in, const py::object& rho_in) {
+  std::vector<Matrix> Q;
+  const size_t K = Q_in.size();
+  if (K == 0) throw InvalidArgument("Q: expected at least one mode, got an empty list");
+  for (size_t k = 0; k < K; ++k) Q.push_back(AsMatrix(Q_in[k], "Q[" + std::to_string(k) + "]"));
+  auto check_count = [K](size_t got, const char* name) {
+    if (got != K) {
+      throw InvalidArgument(std::string(name) + ": " + std::to_string(got) +
+                            " entries, expected " + std::to_string(K) + " (one per mode, as Q)");
+    }
+  };
+  check_count(R_in.size(), "R");
+  std::vector<Matrix> R, S;
+  std::vector<Vector> r, s;
+  std::vector<double> rho;
+  for (size_t k = 0; k < K; ++k) {
+    const auto n = Q[k].rows();
+    const std::string idx = "[" + std::to_string(k) + "]";
+    if (Q[k].cols() != n) {
+      throw InvalidArgument("Q" + idx + ": shape (" + std::to_string(n) + ", " +
+                            std::to_string(Q[k].cols()) + "), expected a square matrix");
+    }
+    R.push_back(AsMatrix(R_in[k], "R" + idx, k == 0 ? -1 : R[0].rows(),
+                         k == 0 ? -1 : R[0].rows()));
+    if (R[k].rows() != R[k].cols()) {
+      throw InvalidArgument("R" + idx + ": shape (" + std::to_string(R[k].rows()) + ", " +
+                            std::to_string(R[k].cols()) + "), expected a square matrix");
+    }
   }
-  return 0.5 * v;
+  auto optional_list = [K, &check_count](const py::object& obj, const char* name) {
+    if (obj.is_none()) return py::list();
+    py::list l = obj;
+    check_count(l.size(), name);
+    return l;
+  };
+  const py::list Sl = optional_list(S_in, "S"), rl = optional_list(r_in, "r"),
+                 sl = optional_list(s_in, "s"), rhol = optional_list(rho_in, "rho");
+  for (size_t k = 0; k < K; ++k) {
+    const auto n = Q[k].rows();
+    const std::string idx = "[" + std::to_string(k) + "]";
+    S.push_back(S_in.is_none() ? Matrix::Zero(n, n) : AsMatrix(Sl[k], "S" + idx, n, n));
+    r.push_back(r_in.is_none() ? Vector::Zero(n) : AsVector(rl[k], "r" + idx, n));
+    s.push_back(s_in.is_none() ? Vector::Zero(n) : AsVector(sl[k], "s" + idx, n));
+    rho.push_back(rho_in.is_none() ? 0.0 : AsFloat(rhol[k], "rho" + idx));
+  }
+  return std::make_unique<QuadraticTrackingCost>(std::move(Q), std::move(r), std::move(R),
+                                                 std::move(rho), std::move(S), std::move(s));
 }
 
-/// l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k, phi_k = 1/2 (x - s_k)' S_k (x - s_k).
-class QuadraticCost : public SwitchedCost {
- public:
-  QuadraticCost(std::vector<Matrix> Q, std::vector<Vector> r, std::vector<Matrix> R,
-                std::vector<double> rho, std::vector<Matrix> S, std::vector<Vector> s)
-      : Q_(std::move(Q)), r_(std::move(r)), R_(std::move(R)), rho_(std::move(rho)),
-        S_(std::move(S)), s_(std::move(s)) {
-    for (size_t k = 0; k < Q_.size(); ++k) {
-      Qr_.push_back(Q_[k] * r_[k]);
-      Ss_.push_back(S_[k] * s_[k]);
-    }
-  }
-
-  static std::unique_ptr<QuadraticCost> Make(const py::list& Q_in, const py::list& R_in,
-                                             const py::object& S_in, const py::object& r_in,
-                                             const py::object& s_in, const py::object& rho_in) {
-    std::vector<Matrix> Q;
-    const size_t K = Q_in.size();
-    if (K == 0) throw InvalidArgument("Q: expected at least one mode, got an empty list");
-    for (size_t k = 0; k < K; ++k) Q.push_back(AsMatrix(Q_in[k], "Q[" + std::to_string(k) + "]"));
-    auto check_count = [K](size_t got, const char* name) {
-      if (got != K) {
-        throw InvalidArgument(std::string(name) + ": " + std::to_string(got) +
-                              " entries, expected " + std::to_string(K) + " (one per mode, as Q)");
-      }
-    };
-    check_count(R_in.size(), "R");
-    std::vector<Matrix> R, S;
-    std::vector<Vector> r, s;
-    std::vector<double> rho;
-    for (size_t k = 0; k < K; ++k) {
-      const auto n = Q[k].rows();
-      const std::string idx = "[" + std::to_string(k) + "]";
-      if (Q[k].cols() != n) {
-        throw InvalidArgument("Q" + idx + ": shape (" + std::to_string(n) + ", " +
-                              std::to_string(Q[k].cols()) + "), expected a square matrix");
-      }
-      R.push_back(AsMatrix(R_in[k], "R" + idx, k == 0 ? -1 : R[0].rows(),
-                           k == 0 ? -1 : R[0].rows()));
-      if (R[k].rows() != R[k].cols()) {
-        throw InvalidArgument("R" + idx + ": shape (" + std::to_string(R[k].rows()) + ", " +
-                              std::to_string(R[k].cols()) + "), expected a square matrix");
-      }
-    }
-    auto optional_list = [K, &check_count](const py::object& obj, const char* name) {
-      if (obj.is_none()) return py::list();
-      py::list l = obj;
-      check_count(l.size(), name);
-      return l;
-    };
-    const py::list Sl = optional_list(S_in, "S"), rl = optional_list(r_in, "r"),
-                   sl = optional_list(s_in, "s"), rhol = optional_list(rho_in, "rho");
-    for (size_t k = 0; k < K; ++k) {
-      const auto n = Q[k].rows();
-      const std::string idx = "[" + std::to_string(k) + "]";
-      S.push_back(S_in.is_none() ? Matrix::Zero(n, n) : AsMatrix(Sl[k], "S" + idx, n, n));
-      r.push_back(r_in.is_none() ? Vector::Zero(n) : AsVector(rl[k], "r" + idx, n));
-      s.push_back(s_in.is_none() ? Vector::Zero(n) : AsVector(sl[k], "s" + idx, n));
-      rho.push_back(rho_in.is_none() ? 0.0 : AsFloat(rhol[k], "rho" + idx));
-    }
-    return std::make_unique<QuadraticCost>(std::move(Q), std::move(r), std::move(R),
-                                           std::move(rho), std::move(S), std::move(s));
-  }
-
- protected:
-  // The cost does not know the system: a mode or size it was not given is an error, not UB.
-  void Check(int k, const ConstVectorRef& x, const ConstVectorRef* u) const {
-    if (k < 0 || k >= static_cast<int>(Q_.size())) {
-      throw InvalidArgument("QuadraticCost: mode k=" + std::to_string(k) + ", but Q has " +
-                            std::to_string(Q_.size()) + " entries (one per mode)");
-    }
-    if (x.size() != Q_[k].rows() || (u != nullptr && u->size() != R_[k].rows())) {
-      throw InvalidArgument("QuadraticCost(k=" + std::to_string(k) + "): x has size " +
-                            std::to_string(x.size()) + " and u size " +
-                            std::to_string(u ? u->size() : 0) + ", Q[k] is " +
-                            std::to_string(Q_[k].rows()) + " x " + std::to_string(Q_[k].rows()) +
-                            " and R[k] " + std::to_string(R_[k].rows()) + " x " +
-                            std::to_string(R_[k].rows()));
-    }
-  }
-  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
-    Check(k, x, &u);
-    return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
-  }
-  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
-                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
-                            MatrixRef lux) const override {
-    Check(k, x, &u);
-    lx.noalias() = Q_[k] * x;
-    lx -= Qr_[k];
-    if (u.size() > 0) lu.noalias() = R_[k] * u;
-    lxx = Q_[k];
-    luu = R_[k];
-    lux.setZero();
-  }
-  double DoSwitching(int k, const ConstVectorRef& x) const override {
-    Check(k, x, nullptr);
-    return HalfQuadraticForm(S_[k], x, s_[k]);
-  }
-  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
-                              MatrixRef phixx) const override {
-    Check(k, x, nullptr);
-    phix.noalias() = S_[k] * x;
-    phix -= Ss_[k];
-    phixx = S_[k];
-  }
-
- private:
-  std::vector<Matrix> Q_;
-  std::vector<Vector> r_;
-  std::vector<Matrix> R_;
-  std::vector<double> rho_;
-  std::vector<Matrix> S_;
-  std::vector<Vector> s_;
-  std::vector<Vector> Qr_, Ss_;
-};
 
 // ------------------------------------------------------------- Python-callable system / cost
 
@@ -805,12 +733,12 @@ class SolveInterrupted(KeyboardInterrupt):
           },
           py::arg("k"), py::arg("x"));
 
-  py::class_<QuadraticCost, SwitchedCost>(
+  py::class_<QuadraticTrackingCost, SwitchedCost>(
       mod, "QuadraticCost",
       "l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k, "
       "phi_k = 1/2 (x - s_k)' S_k (x - s_k) (phi_{K-1}: the terminal cost). Lists of K entries; "
       "S, r, s, rho default to zero. Runs entirely in C++.")
-      .def(py::init(&QuadraticCost::Make), py::arg("Q"), py::arg("R"), py::arg("S") = py::none(),
+      .def(py::init(&MakeQuadraticCost), py::arg("Q"), py::arg("R"), py::arg("S") = py::none(),
            py::arg("r") = py::none(), py::arg("s") = py::none(), py::arg("rho") = py::none());
 
   py::class_<CallbackSystem, SwitchedSystem>(

@@ -15,6 +15,7 @@
 #include "ddoc/plant.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
+#include "ddoc/quadratic_cost.h"
 #include "ddoc/return_map.h"
 #include "ddoc/sample_layout.h"
 #include "ddoc/switched_system.h"

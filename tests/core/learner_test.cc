@@ -437,14 +437,6 @@ TEST(Learner, ConvergedLqrGainIsTheExactOne) {
   EXPECT_NEAR(r.cost, J, 1e-4 * J);
 }
 
-}  // namespace
-}  // namespace testing
-}  // namespace ddoc
-
-namespace ddoc {
-namespace testing {
-namespace {
-
 // The line search's acceptance test must ask for a sufficient decrease, not any decrease. A probe
 // runs the first trial of the two-mode LQ problem (it does not depend on c) and measures its
 // decrease, predicted change and step; learners with c set from the probe then face the same
@@ -495,14 +487,6 @@ TEST(Learner, LineSearchTellsSufficientDecreaseFromAnyDecrease) {
     }
   }
 }
-
-}  // namespace
-}  // namespace testing
-}  // namespace ddoc
-
-namespace ddoc {
-namespace testing {
-namespace {
 
 // The step test of Algorithm 1 (paper preset, step_convergence): with the gradient guard
 // disabled (optimality_tolerance huge), convergence is decided by int |du|^2 + |dT|^2 <= epsilon

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "ddoc/linear_system.h"
+#include "ddoc/quadratic_cost.h"
 
 namespace ddoc {
 namespace testing {
@@ -16,68 +17,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 /// reference optimum has a duration near it.
 constexpr double kMinDuration = 0.01;
 
-/// 1/2 a' M a without temporaries (the engine calls costs inside its loops).
-double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector& c) {
-  double v = 0;
-  for (int j = 0; j < a.size(); ++j) {
-    const double aj = a(j) - (c.size() > 0 ? c(j) : 0.0);
-    for (int i = 0; i < a.size(); ++i) v += (a(i) - (c.size() > 0 ? c(i) : 0.0)) * M(i, j) * aj;
-  }
-  return 0.5 * v;
-}
-
-
-
-/// l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k,
-/// phi_k = 1/2 (x - s_k)' S_k (x - s_k). Hand-written derivatives.
-class QuadraticTrackingCost : public SwitchedCost {
- public:
-  QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r, std::vector<Matrix> R,
-                        std::vector<double> rho, std::vector<Matrix> S, std::vector<Vector> s)
-      : Q_(std::move(Q)), r_(std::move(r)), R_(std::move(R)), rho_(std::move(rho)),
-        S_(std::move(S)), s_(std::move(s)) {
-    for (size_t k = 0; k < Q_.size(); ++k) {
-      Qr_.push_back(Q_[k] * r_[k]);
-      Ss_.push_back(S_[k] * s_[k]);
-    }
-  }
-  explicit QuadraticTrackingCost(const LinearQuadraticData& d)
-      : QuadraticTrackingCost(d.Q, d.r, d.R, d.rho, d.S, d.s) {}
-
- protected:
-  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
-    return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
-  }
-  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
-                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
-                            MatrixRef lux) const override {
-    lx.noalias() = Q_[k] * x;
-    lx -= Qr_[k];
-    if (u.size() > 0) lu.noalias() = R_[k] * u;
-    lxx = Q_[k];
-    luu = R_[k];
-    lux.setZero();
-  }
-  double DoSwitching(int k, const ConstVectorRef& x) const override {
-    return HalfQuadraticForm(S_[k], x, s_[k]);
-  }
-  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
-                              MatrixRef phixx) const override {
-    phix.noalias() = S_[k] * x;
-    phix -= Ss_[k];
-    phixx = S_[k];
-  }
-
- private:
-  std::vector<Matrix> Q_;   // K, n_k x n_k
-  std::vector<Vector> r_;   // K, n_k
-  std::vector<Matrix> R_;   // K, m x m
-  std::vector<double> rho_; // K
-  std::vector<Matrix> S_;   // K, n_k x n_k
-  std::vector<Vector> s_;   // K, n_k
-  std::vector<Vector> Qr_;  // K, n_k: Q_k r_k
-  std::vector<Vector> Ss_;  // K, n_k: S_k s_k
-};
 
 /// The fishing problem's dynamics (FishingData), m = 0, hand-written derivatives.
 class FishingSystem : public SwitchedSystem {
@@ -171,7 +110,7 @@ void ZeroInput(int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); }
 std::unique_ptr<StandardProblem> FromLq(const LinearQuadraticData& d) {
   auto sp = std::make_unique<StandardProblem>();
   sp->system = std::make_unique<LinearSystem>(d.A, d.B, d.E);
-  sp->cost = std::make_unique<QuadraticTrackingCost>(d);
+  sp->cost = std::make_unique<QuadraticTrackingCost>(d.Q, d.r, d.R, d.rho, d.S, d.s);
   SetBounds(sp.get(), d.u_min, d.u_max, d.final_time);
   sp->x0 = d.x0;
   sp->initial_input = ZeroInput;

@@ -269,6 +269,17 @@ TEST(StandardReferences, Exp0) {
 // dynamics, convex cost, convex input set); a finer step; zero gradients; the bound is active
 // on a set of positive measure; the open-loop extremal input simulated forward reproduces the
 // cost; a dense search over the switching instant finds nothing lower.
+// Central differences (step 1e-5 s) of the extremal's cost w.r.t. the switching instants,
+// each extremal solved from lambda0.
+Vector ExtremalCostGradient(const ShootingProblem& p, const Vector& T, const Vector& lambda0) {
+  return FdGradient(
+      [&](const Vector& Tk) {
+        const Extremal x = SolveExtremal(p, Tk, lambda0);
+        return x.converged ? x.cost : kInf;
+      },
+      T, 1e-5);
+}
+
 TEST(StandardReferences, Exp0Bounded) {
   const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0_bounded");
   const ReferenceOptimum r = ComputeReference(*sp);
@@ -278,12 +289,7 @@ TEST(StandardReferences, Exp0Bounded) {
   const Extremal e = SolveExtremal(p, r.T, r.lambda0);
   ASSERT_TRUE(e.converged);
   EXPECT_LT(std::abs(e.gradient(0)), 1e-8);
-  const Vector g = FdGradient(
-      [&](const Vector& T) {
-        Extremal x = SolveExtremal(p, T, e.lambda0);
-        return x.converged ? x.cost : kInf;
-      },
-      r.T, 1e-5);
+  const Vector g = ExtremalCostGradient(p, r.T, e.lambda0);
   EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-6) << g.transpose();
   // The input is on its bound for > 10 % of the horizon.
   const auto u = ExtremalInput(p, r.T, e.lambda0);
@@ -341,12 +347,7 @@ TEST(StandardReferences, Exp1) {
   const Extremal e = SolveExtremal(p, r.T, r.lambda0);
   ASSERT_TRUE(e.converged);
   EXPECT_LT(e.gradient.cwiseAbs().maxCoeff(), 1e-8);
-  const Vector g = FdGradient(
-      [&](const Vector& T) {
-        Extremal x = SolveExtremal(p, T, e.lambda0);
-        return x.converged ? x.cost : kInf;
-      },
-      r.T, 1e-5);
+  const Vector g = ExtremalCostGradient(p, r.T, e.lambda0);
   EXPECT_LT(g.cwiseAbs().maxCoeff(), 1e-6) << g.transpose();
   EXPECT_GT(r.hessian_eigenvalues.minCoeff(), 1.0);
   ShootingProblem fine = p;

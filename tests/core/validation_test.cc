@@ -9,7 +9,9 @@
 
 #include "ddoc/cost.h"
 #include "ddoc/learner.h"
+#include "ddoc/check_derivatives.h"
 #include "ddoc/linear_system.h"
+#include "ddoc/quadratic_cost.h"
 #include "ddoc/switching_time_update.h"
 #include "test_systems.h"
 #include "test_util.h"
@@ -299,6 +301,41 @@ TEST(LinearSystem, EvaluatesItsMatricesAndNamesWrongSizes) {
   const LinearSystem free({A0}, {Matrix::Zero(2, 0)}, {Matrix::Identity(2, 2)});
   EXPECT_EQ(free.input_dim(), 0);
   EXPECT_TRUE(free.has_cycle_reset());
+}
+
+
+// ddoc::QuadraticTrackingCost: values against the formula, derivatives against central
+// differences (with the LinearSystem above as the system), wrong sizes and modes named.
+TEST(QuadraticTrackingCost, EvaluatesTheFormulaAndNamesWrongSizes) {
+  Matrix A0(2, 2), A1(3, 3), B0(2, 1), B1(3, 1), E0(3, 2);
+  A0 << 0, 1, -2, -0.3;
+  A1 = Matrix::Identity(3, 3) * -0.5;
+  B0 << 0, 1;
+  B1 << 1, 0, 2;
+  E0 << 1, 0, 0, 1, 0.5, 0.5;
+  const LinearSystem sys({A0, A1}, {B0, B1}, {E0});
+  Matrix Q0(2, 2), Q1 = Matrix::Identity(3, 3) * 2.0, R = Matrix::Constant(1, 1, 0.3);
+  Q0 << 2, 0.5, 0.5, 1;
+  const Vector r0 = (Vector(2) << 1, -1).finished(), r1 = Vector::Constant(3, 0.5);
+  const QuadraticTrackingCost cost({Q0, Q1}, {r0, r1}, {R, R}, {0.2, 0.0},
+                                   {Matrix::Zero(2, 2), Q1}, {Vector::Zero(2), r1});
+  const Vector x = (Vector(2) << 0.3, -0.2).finished(), u = Vector::Constant(1, 0.7);
+  const double expected = 0.5 * (x - r0).dot(Q0 * (x - r0)) + 0.5 * 0.3 * 0.49 + 0.2;
+  EXPECT_NEAR(cost.Running(0, x, u), expected, 1e-15);
+  for (int k = 0; k < 2; ++k) {
+    const Vector xk = Vector::Constant(sys.state_dim(k), 0.4);
+    const DerivativeCheckReport report = CheckDerivatives(sys, &cost, k, xk, u);
+    EXPECT_TRUE(report.PassedPerEntry()) << "mode " << k << ": " << report.max_entry_error();
+  }
+  ExpectThrowsWith([&] { cost.Running(2, x, u); }, "mode k=2, but Q has 2 entries");
+  ExpectThrowsWith([&] { cost.Running(1, x, u); }, "x has size 2");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0}, {r0}, {R}, {0.0}, {Q0}, {}); },
+                   "expected one per mode");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0}, {r1}, {R}, {0.0}, {Q0}, {r0}); },
+                   "r[0] has size 3, expected 2");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0, Q1}, {r0, r1}, {R, Q0}, {0, 0}, {Q0, Q1},
+                                               {r0, r1}); },
+                   "R[1] is 2 x 2, expected 1 x 1");
 }
 
 }  // namespace

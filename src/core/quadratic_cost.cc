@@ -1,0 +1,115 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+#include "ddoc/quadratic_cost.h"
+
+#include <string>
+#include <utility>
+
+namespace ddoc {
+namespace {
+
+// 1/2 (a - c)' M (a - c) without temporaries (c empty: 0).
+double HalfQuadraticForm(const Matrix& M, const ConstVectorRef& a, const Vector& c) {
+  double v = 0;
+  for (int j = 0; j < a.size(); ++j) {
+    const double aj = a(j) - (c.size() > 0 ? c(j) : 0.0);
+    for (int i = 0; i < a.size(); ++i) v += (a(i) - (c.size() > 0 ? c(i) : 0.0)) * M(i, j) * aj;
+  }
+  return 0.5 * v;
+}
+
+std::string Entry(const char* name, size_t k) {
+  return std::string(name) + "[" + std::to_string(k) + "]";
+}
+
+void CheckSquare(const Matrix& M, Eigen::Index n, const std::string& name) {
+  if (M.rows() != n || M.cols() != n) {
+    throw InvalidArgument("QuadraticTrackingCost: " + name + " is " + std::to_string(M.rows()) +
+                          " x " + std::to_string(M.cols()) + ", expected " + std::to_string(n) +
+                          " x " + std::to_string(n));
+  }
+}
+
+void CheckSize(const Vector& v, Eigen::Index n, const std::string& name) {
+  if (v.size() != n) {
+    throw InvalidArgument("QuadraticTrackingCost: " + name + " has size " +
+                          std::to_string(v.size()) + ", expected " + std::to_string(n));
+  }
+}
+
+}  // namespace
+
+QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r,
+                                             std::vector<Matrix> R, std::vector<double> rho,
+                                             std::vector<Matrix> S, std::vector<Vector> s)
+    : Q_(std::move(Q)), R_(std::move(R)), S_(std::move(S)), r_(std::move(r)), s_(std::move(s)),
+      rho_(std::move(rho)) {
+  const size_t K = Q_.size();
+  if (K == 0 || r_.size() != K || R_.size() != K || rho_.size() != K || S_.size() != K ||
+      s_.size() != K) {
+    throw InvalidArgument("QuadraticTrackingCost: Q, r, R, rho, S, s have " +
+                          std::to_string(Q_.size()) + ", " + std::to_string(r_.size()) + ", " +
+                          std::to_string(R_.size()) + ", " + std::to_string(rho_.size()) + ", " +
+                          std::to_string(S_.size()) + ", " + std::to_string(s_.size()) +
+                          " entries, expected one per mode (K >= 1) in each");
+  }
+  for (size_t k = 0; k < K; ++k) {
+    const Eigen::Index n = Q_[k].rows();
+    CheckSquare(Q_[k], n, Entry("Q", k));
+    CheckSize(r_[k], n, Entry("r", k));
+    CheckSquare(R_[k], R_[0].rows(), Entry("R", k));
+    CheckSquare(S_[k], n, Entry("S", k));
+    CheckSize(s_[k], n, Entry("s", k));
+    Qr_.push_back(Q_[k] * r_[k]);
+    Ss_.push_back(S_[k] * s_[k]);
+  }
+}
+
+void QuadraticTrackingCost::Check(int k, const ConstVectorRef& x, const ConstVectorRef* u) const {
+  if (k < 0 || k >= static_cast<int>(Q_.size())) {
+    throw InvalidArgument("QuadraticTrackingCost: mode k=" + std::to_string(k) + ", but Q has " +
+                          std::to_string(Q_.size()) + " entries (one per mode)");
+  }
+  const auto kk = static_cast<size_t>(k);
+  if (x.size() != Q_[kk].rows() || (u != nullptr && u->size() != R_[kk].rows())) {
+    throw InvalidArgument("QuadraticTrackingCost(k=" + std::to_string(k) + "): x has size " +
+                          std::to_string(x.size()) + " and u size " +
+                          std::to_string(u ? u->size() : 0) + ", Q[k] is " +
+                          std::to_string(Q_[kk].rows()) + " x " + std::to_string(Q_[kk].rows()) +
+                          " and R[k] " + std::to_string(R_[kk].rows()) + " x " +
+                          std::to_string(R_[kk].rows()));
+  }
+}
+
+double QuadraticTrackingCost::DoRunning(int k, const ConstVectorRef& x,
+                                        const ConstVectorRef& u) const {
+  Check(k, x, &u);
+  return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
+}
+
+void QuadraticTrackingCost::DoRunningDerivatives(int k, const ConstVectorRef& x,
+                                                 const ConstVectorRef& u, VectorRef lx,
+                                                 VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                                                 MatrixRef lux) const {
+  Check(k, x, &u);
+  lx.noalias() = Q_[k] * x;
+  lx -= Qr_[k];
+  if (u.size() > 0) lu.noalias() = R_[k] * u;
+  lxx = Q_[k];
+  luu = R_[k];
+  lux.setZero();
+}
+
+double QuadraticTrackingCost::DoSwitching(int k, const ConstVectorRef& x) const {
+  Check(k, x, nullptr);
+  return HalfQuadraticForm(S_[k], x, s_[k]);
+}
+
+void QuadraticTrackingCost::DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                                                   MatrixRef phixx) const {
+  Check(k, x, nullptr);
+  phix.noalias() = S_[k] * x;
+  phix -= Ss_[k];
+  phixx = S_[k];
+}
+
+}  // namespace ddoc
