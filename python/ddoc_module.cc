@@ -461,15 +461,6 @@ class CallbackCost : public SwitchedCost {
 
 // ------------------------------------------------------------------------------- solving
 
-const char* StatusName(LearnerStatus status) {
-  switch (status) {
-    case LearnerStatus::kRunning: return "running";
-    case LearnerStatus::kConverged: return "converged";
-    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
-    case LearnerStatus::kMaxTrials: return "max_trials";
-  }
-  return "unknown";
-}
 
 LearnerSettings PresetByName(const std::string& name) {
   if (name == "default") return PresetSettings(Preset::kDefault);
@@ -580,7 +571,7 @@ class PyLearner {
           info["nominal_cost"] = learner.nominal_cost();
           info["alpha"] = r.alpha;
           info["optimality"] = r.optimality;
-          info["status"] = StatusName(r.status);
+          info["status"] = LearnerStatusName(r.status);
           progress(info);
         }
       }
@@ -864,7 +855,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readonly("x0", &Trajectory::x0);
 
   py::class_<PySolveResult>(mod, "SolveResult", "Result of Learner.solve (NumPy arrays).")
-      .def_property_readonly("status", [](const PySolveResult& r) { return StatusName(r.result.status); },
+      .def_property_readonly("status", [](const PySolveResult& r) { return LearnerStatusName(r.result.status); },
                              "'converged', 'line_search_failed' or 'max_trials'")
       .def_property_readonly("trials", [](const PySolveResult& r) { return r.result.trials; })
       .def_property_readonly("iterations", [](const PySolveResult& r) { return r.result.iterations; })
@@ -880,7 +871,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readonly("interrupted", &PySolveResult::interrupted)
       .def("__repr__", [](const PySolveResult& r) {
         std::ostringstream s;
-        s << "SolveResult(status='" << StatusName(r.result.status) << "', trials=" << r.result.trials
+        s << "SolveResult(status='" << LearnerStatusName(r.result.status) << "', trials=" << r.result.trials
           << ", iterations=" << r.result.iterations << ", cost=" << r.result.cost << ")";
         return s.str();
       });
@@ -909,7 +900,7 @@ progress: optional callable(dict) after each trial. The GIL is released during e
 Ctrl-C raises ddoc.SolveInterrupted (a KeyboardInterrupt) whose .result is the partial result.)")
       .def_property_readonly("nominal", [](const PyLearner& l) { return l.learner().nominal(); },
                              "The current nominal trajectory (a copy).")
-      .def_property_readonly("status", [](const PyLearner& l) { return StatusName(l.learner().status()); })
+      .def_property_readonly("status", [](const PyLearner& l) { return LearnerStatusName(l.learner().status()); })
       .def_property_readonly("trials", [](const PyLearner& l) { return l.learner().trials(); })
       .def_property_readonly("iteration", [](const PyLearner& l) { return l.learner().iteration(); })
       .def_property_readonly("settings", [](const PyLearner& l) { return l.learner().settings(); });

@@ -104,6 +104,9 @@ enum class LearnerStatus {
   kMaxTrials,        ///< batch Solve hit max_trials
 };
 
+/// "running", "converged", "line_search_failed" or "max_trials" (logs, tables, Python).
+const char* LearnerStatusName(LearnerStatus status);
+
 /// First-order optimality of a nominal: the norm of the gradient of the cost projected onto the
 /// feasible directions, ||P(grad_u)||_{L2 in t} for the inputs (components at a bound whose
 /// gradient points out of the box removed) and ||P(grad_D)|| for the durations (the tangent cone

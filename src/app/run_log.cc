@@ -18,15 +18,6 @@ std::FILE* OpenOrThrow(const std::string& path) {
   return f;
 }
 
-const char* LearnerStatusName(LearnerStatus status) {
-  switch (status) {
-    case LearnerStatus::kRunning: return "running";
-    case LearnerStatus::kConverged: return "converged";
-    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
-    case LearnerStatus::kMaxTrials: return "max_trials";
-  }
-  return "?";
-}
 
 // -1 (not yet) is written as null.
 nlohmann::json HopOrNull(int hop) { return hop >= 0 ? nlohmann::json(hop) : nlohmann::json(); }

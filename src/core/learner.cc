@@ -54,6 +54,16 @@ LearnerSettings PresetSettings(Preset preset) {
   return preset == Preset::kPaper ? LearnerSettings::Paper() : LearnerSettings{};
 }
 
+const char* LearnerStatusName(LearnerStatus status) {
+  switch (status) {
+    case LearnerStatus::kRunning: return "running";
+    case LearnerStatus::kConverged: return "converged";
+    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
+    case LearnerStatus::kMaxTrials: return "max_trials";
+  }
+  return "unknown";
+}
+
 Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
                              const BackwardPass& pass) {
   Optimality out;

@@ -237,15 +237,6 @@ LinearQuadraticData StateSizeData() {
 
 // ---------------------------------------------------------------------------------------------
 
-const char* LearnerStatusName(LearnerStatus status) {
-  switch (status) {
-    case LearnerStatus::kRunning: return "running";
-    case LearnerStatus::kConverged: return "converged";
-    case LearnerStatus::kLineSearchFailed: return "line_search_failed";
-    case LearnerStatus::kMaxTrials: return "max_trials";
-  }
-  return "unknown";
-}
 
 std::vector<std::string> StandardProblemNames() {
   return {"lqr", "sto2_linear", "sto9_linear", "fishing",

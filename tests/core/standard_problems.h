@@ -61,9 +61,6 @@ struct StandardProblem {
   FunctionPolicy InitialPolicy() const { return FunctionPolicy(initial_durations, initial_input); }
 };
 
-/// "running", "converged", "line_search_failed" or "max_trials".
-const char* LearnerStatusName(LearnerStatus status);
-
 /// The names of the suite, in the order of the table above.
 std::vector<std::string> StandardProblemNames();
 

@@ -265,15 +265,23 @@ TEST(Validation, SwitchingTimeUpdateRegularizesAndRespectsDurationBounds) {
 }
 
 
+// The matrices of a two-mode linear system with a rectangular reset (2 states, then 3).
+struct TwoModeMatrices {
+  Matrix A0{2, 2}, A1{3, 3}, B0{2, 1}, B1{3, 1}, E0{3, 2};
+  TwoModeMatrices() {
+    A0 << 0, 1, -2, -0.3;
+    A1 = Matrix::Identity(3, 3) * -0.5;
+    B0 << 0, 1;
+    B1 << 1, 0, 2;
+    E0 << 1, 0, 0, 1, 0.5, 0.5;
+  }
+};
+
 // ddoc::LinearSystem: the flow, reset and their derivatives are the matrices; every wrong size
 // is named.
 TEST(LinearSystem, EvaluatesItsMatricesAndNamesWrongSizes) {
-  Matrix A0(2, 2), A1(3, 3), B0(2, 1), B1(3, 1), E0(3, 2);
-  A0 << 0, 1, -2, -0.3;
-  A1 = Matrix::Identity(3, 3) * -0.5;
-  B0 << 0, 1;
-  B1 << 1, 0, 2;
-  E0 << 1, 0, 0, 1, 0.5, 0.5;
+  const TwoModeMatrices mats;
+  const Matrix &A0 = mats.A0, &A1 = mats.A1, &B0 = mats.B0, &B1 = mats.B1, &E0 = mats.E0;
   const LinearSystem sys({A0, A1}, {B0, B1}, {E0});
   EXPECT_EQ(sys.num_modes(), 2);
   EXPECT_EQ(sys.state_dim(1), 3);
@@ -307,12 +315,8 @@ TEST(LinearSystem, EvaluatesItsMatricesAndNamesWrongSizes) {
 // ddoc::QuadraticTrackingCost: values against the formula, derivatives against central
 // differences (with the LinearSystem above as the system), wrong sizes and modes named.
 TEST(QuadraticTrackingCost, EvaluatesTheFormulaAndNamesWrongSizes) {
-  Matrix A0(2, 2), A1(3, 3), B0(2, 1), B1(3, 1), E0(3, 2);
-  A0 << 0, 1, -2, -0.3;
-  A1 = Matrix::Identity(3, 3) * -0.5;
-  B0 << 0, 1;
-  B1 << 1, 0, 2;
-  E0 << 1, 0, 0, 1, 0.5, 0.5;
+  const TwoModeMatrices mats;
+  const Matrix &A0 = mats.A0, &A1 = mats.A1, &B0 = mats.B0, &B1 = mats.B1, &E0 = mats.E0;
   const LinearSystem sys({A0, A1}, {B0, B1}, {E0});
   Matrix Q0(2, 2), Q1 = Matrix::Identity(3, 3) * 2.0, R = Matrix::Constant(1, 1, 0.3);
   Q0 << 2, 0.5, 0.5, 1;
