@@ -77,6 +77,15 @@ struct LearnerSettings {
   /// definite, non-finite), shrinks 10x after each accepted trial, never below the floor.
   /// Default 0 (the converged gain is the exact one).
   double regularization_min = 0.0;
+  /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
+  /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
+  /// value of the pass, dx0 = trial x0 - nominal x0) plus the nominal's cost change under the
+  /// trial's cost reference (docs/engine.md, "Trials from other starts"). Default true.
+  bool start_correction = true;
+  /// Online learning: when alpha < alpha_min the line search restarts (alpha <- alpha_initial,
+  /// the same nominal and cost) instead of terminating; batch Solve still terminates. Default
+  /// false.
+  bool restart_on_failure = false;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
   BackwardPassSettings backward;         ///< (30)
@@ -125,7 +134,9 @@ struct TrialResult {
   bool accepted = false;    ///< the acceptance test held; the trial became the new nominal
   double cost = 0;          ///< measured cost I^{i+1} of the trial (inf for an aborted trial)
   double nominal_cost = 0;  ///< cost I^i of the nominal it was compared with
-  double decrease = 0;      ///< I^{i+1} - I^i
+  double decrease = 0;      ///< I^{i+1} - (I^i + start_shift)
+  double start_shift = 0;   ///< dI_start of LearnerSettings::start_correction (0 when off)
+  bool restarted = false;   ///< restart_on_failure: the line search restarted after this trial
   double predicted = 0;     ///< the predicted change dI_pred(alpha) (0 for kLyapunov's pass)
   double step = 0;          ///< int |du|^2 dtau + |dT|^2 (measured dT, du vs. nominal inputs)
   double alpha = 0;         ///< alpha used for this trial
@@ -220,6 +231,11 @@ class Learner {
   double alpha() const { return alpha_; }
   int iteration() const { return iteration_; }
   int trials() const { return trials_; }
+  /// Restarts so far (LearnerSettings::restart_on_failure).
+  int restarts() const { return restarts_; }
+  /// dI_start of LearnerSettings::start_correction for a trial that started at x0 (0 when x0
+  /// has another size than the nominal's start). Call after the trial's cost reference is set.
+  double StartShift(const ConstVectorRef& x0) const;
   const Trajectory& nominal() const { return nominal_; }
   double nominal_cost() const { return nominal_cost_; }
   const BackwardPass& backward_pass() const { return pass_; }
@@ -238,6 +254,8 @@ class Learner {
   bool AcceptNominal(const Trajectory& direction, double cost);
   // (30) on nominal_ with the current mu, raising it on failure.
   bool RunPass();
+  // restart_on_failure: alpha <- alpha_initial around the same nominal.
+  void RestartLineSearch(TrialResult* r);
   // The status after a new nominal: converged when the optimality (and step) tests hold.
   void UpdateConvergence();
   // The trial `measured` (run with controllers_[active_]) becomes the nominal with cost `cost`:
@@ -260,9 +278,12 @@ class Learner {
   Trajectory nominal_;       // x^i, u^i, T^i (direction trajectory)
   Trajectory previous_nominal_;
   double nominal_cost_ = 0;  // I^i (cost plant)
+  double nominal_own_cost_ = 0;  // the nominal's EvaluateCost when it was adopted
   double alpha_ = 1;
   int iteration_ = 0;
   int trials_ = 0;
+  int restarts_ = 0;
+  bool in_solve_ = false;  // inside Solve: restart_on_failure does not apply
   LearnerStatus status_ = LearnerStatus::kRunning;
   SwitchingTimeStep switching_step_;
   std::vector<double> step_history_;  // step of each accepted trial

@@ -47,6 +47,8 @@ struct TrialOutcome {
   /// trial that could not be measured).
   double cost = 0;
   LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the trial
+  double start_shift = 0;  ///< TrialResult::start_shift (0 for trials the learner did not judge)
+  bool restarted = false;  ///< TrialResult::restarted: the line search restarted after it
 };
 
 /// Runs the trials of one of the three methods (Section V) with one engine, whatever the plant.

@@ -47,6 +47,7 @@ LearnerSettings LearnerSettings::Paper() {
   s.backward.equation = BackwardEquation::kLyapunov;
   s.backward.time_curvature = false;
   s.backward.use_previous_du = true;
+  s.start_correction = false;
   return s;
 }
 
@@ -172,7 +173,28 @@ bool Learner::AcceptNominal(const Trajectory& direction, double cost) {
     return false;
   }
   nominal_cost_ = cost;
+  nominal_own_cost_ = settings_.start_correction ? EvaluateCost(*problem_, nominal_).total : 0.0;
   return true;
+}
+
+double Learner::StartShift(const ConstVectorRef& x0) const {
+  if (!settings_.start_correction || !initialized_ || x0.size() != nominal_.x0.size()) return 0.0;
+  const Vector dx = x0 - nominal_.x0;
+  const Eigen::Index n = dx.size();
+  const auto P = pass_.P(0, 0);
+  const auto p = pass_.p(0, 0);
+  const double value = p.head(n).dot(dx) + 0.5 * dx.dot(P.topLeftCorner(n, n) * dx);
+  // The nominal's own cost under the cost's current reference (a reference that depends on the
+  // trial, e.g. the hopper's I1 against the trial's start) minus the one it was adopted with.
+  const double reference = EvaluateCost(*problem_, nominal_).total - nominal_own_cost_;
+  const double shift = value + reference;
+  return std::isfinite(shift) ? shift : 0.0;
+}
+
+void Learner::RestartLineSearch(TrialResult* r) {
+  alpha_ = settings_.alpha_initial;
+  ++restarts_;
+  r->restarted = true;
 }
 
 bool Learner::AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost) {
@@ -235,6 +257,7 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   initialized_ = true;
   alpha_ = settings_.alpha_initial;
   trials_ = 0;
+  restarts_ = 0;
   accepted_ = -1;
   active_ = 0;
   trial_pending_ = false;
@@ -317,7 +340,13 @@ TrialResult Learner::AbortTrial() {
   trial_pending_ = false;
   if (status_ != LearnerStatus::kLineSearchFailed) {
     alpha_ *= settings_.interpolate_backtracking ? 0.1 : settings_.gamma;
-    if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
+    if (alpha_ < settings_.alpha_min) {
+      if (settings_.restart_on_failure && !in_solve_) {
+        RestartLineSearch(&r);
+      } else {
+        status_ = LearnerStatus::kLineSearchFailed;
+      }
+    }
   }
   r.iteration = iteration_;
   r.status = status_;
@@ -343,7 +372,8 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.alpha = alpha_;
   r.cost = r.breakdown.total;
   r.nominal_cost = nominal_cost_;
-  r.decrease = r.cost - nominal_cost_;
+  r.start_shift = StartShift(measured.x0);
+  r.decrease = r.cost - (nominal_cost_ + r.start_shift);
   const Vector dT = measured.T - nominal_.T;
   r.step = InputDistance(measured, nominal_) + dT.squaredNorm();
   // The predicted change: alpha on the feed-forward of the u-part, the (31) model for T.
@@ -402,7 +432,13 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
       next = std::min(std::max(next, 0.1 * alpha_), settings_.gamma * alpha_);
     }
     alpha_ = next;
-    if (alpha_ < settings_.alpha_min) status_ = LearnerStatus::kLineSearchFailed;
+    if (alpha_ < settings_.alpha_min) {
+      if (settings_.restart_on_failure && !in_solve_) {
+        RestartLineSearch(&r);
+      } else {
+        status_ = LearnerStatus::kLineSearchFailed;
+      }
+    }
   }
   r.iteration = iteration_;
   r.status = status_;
@@ -424,12 +460,14 @@ SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const Cons
   }
   SolveResult result;
   result.cost_history.push_back(nominal_cost_);
+  in_solve_ = true;  // a batch solve from one start terminates instead of restarting
   while (status_ == LearnerStatus::kRunning && trials_ < settings_.max_trials) {
     OnlineController& policy = NextTrial();
     cost_plant.Run(x0, policy, &measured);
     const TrialResult r = CompleteTrial(measured, same ? nullptr : &direction_plant);
     if (r.accepted) result.cost_history.push_back(nominal_cost_);
   }
+  in_solve_ = false;
   result.status = status_ == LearnerStatus::kRunning ? LearnerStatus::kMaxTrials : status_;
   result.trials = trials_;
   result.iterations = iteration_;

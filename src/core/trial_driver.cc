@@ -82,6 +82,8 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.accepted = r.accepted;
     out.cost = r.cost;
     out.status = r.status;
+    out.start_shift = r.start_shift;
+    out.restarted = r.restarted;
     UseLearnedLaw(learner_->NextTrial());
     // Terminated before any trial passed (36): the law of iteration 0 is u^0, which produced
     // the nominal, not a replay of the nominal's inputs (Learner::NextTrial).
