@@ -37,6 +37,8 @@ struct HopReport {
   bool accepted = false;        ///< (36) held (true for trials it does not judge)
   double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)
   LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the hop
+  double start_shift = 0.0;  ///< TrialOutcome::start_shift: the start correction of (36)
+  bool restarted = false;    ///< TrialOutcome::restarted: the line search restarted after it
 };
 
 }  // namespace ddoc::plugin

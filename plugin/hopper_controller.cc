@@ -386,6 +386,8 @@ void HopperController::TakeOfflineResult() {
     w.report.accepted = outcome_.accepted;
     w.report.learner_cost = outcome_.cost;
     w.report.status = outcome_.status;
+    w.report.start_shift = outcome_.start_shift;
+    w.report.restarted = outcome_.restarted;
     w.needs_outcome = false;
     break;
   }

@@ -54,8 +54,9 @@ struct ControllerConfig {
   HopperModeDurations durations;         ///< duration bounds of flight and stance, s
   ContactPhaseSettings contact;          ///< the contact-phase detector (src/mujoco)
   int max_samples_per_mode = 4000;       ///< preallocated samples per mode, >= 10
-  /// I1 reference of the learner: false the hop's own start (42), true the gait (NOT the paper).
-  bool anchor_reference = false;
+  /// I1 reference of the learner: true (default) the model gait's takeoff state (NOT the
+  /// paper), false the hop's own start (42).
+  bool anchor_reference = true;
   /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
   /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;

@@ -63,12 +63,19 @@ HopperParams ModelParams(const Scenario& s) {
 
 plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperParams& model) {
   plugin::ControllerConfig config;
+  const LearningOverrides& l = s.learning;
+  if (l.paper) {
+    // Algorithm 1 as printed on the paper's reading of the hopper (docs/hopper.md).
+    config.driver = HopperTrialSettings(Preset::kPaper);
+    config.model_learner.backward.cyclic_value = 0.0;
+    config.model_learner.backward.terminal_event = false;
+    config.anchor_reference = false;
+  }
   config.driver.method = s.method;
   config.model = model;
   config.gait.forward_speed = s.forward_speed;
   if (s.gait_k0_hip) config.gait.k0_hip = *s.gait_k0_hip;
   if (s.gait_k0_leg) config.gait.k0_leg = *s.gait_k0_leg;
-  const LearningOverrides& l = s.learning;
   LearnerSettings& learner = config.driver.learner;
   if (l.c) learner.c = *l.c;
   if (l.gamma) learner.gamma = *l.gamma;
@@ -99,6 +106,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
 
 void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--method,-m", method, "alg1 | ocfb | mrl (overrides the scenario)");
+  cli->add_option("--preset", preset,
+                  "default | paper: the learner and the hopper's reading (overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
   cli->add_option("--offline-latency", offline_latency,
                   "simulated s from a hop's end until the law learned from it takes effect "
@@ -117,6 +126,12 @@ namespace {
 Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   Scenario s = LoadScenario(path);
   if (!o.method.empty()) s.method = ParseMethod(o.method);
+  if (!o.preset.empty()) {
+    if (o.preset != "default" && o.preset != "paper") {
+      throw ScenarioError("--preset \"" + o.preset + "\": expected default or paper");
+    }
+    s.learning.paper = o.preset == "paper";
+  }
   if (o.hops && *o.hops < 0) {
     throw ScenarioError("--hops must be >= 0, got " + std::to_string(*o.hops));
   }

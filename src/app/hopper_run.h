@@ -72,6 +72,7 @@ struct RunOverrides {
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
+  std::string preset;                    ///< --preset default | paper (overrides the scenario)
 
   /// Registers the flags shared by ddoc-hopper and ddoc-return-map on `cli`; `full` adds those
   /// only ddoc-hopper takes (--hops, --seconds, --robot, --model-mjcf, --push).

@@ -46,6 +46,7 @@ struct Summary {
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
+  int restarts = 0;  // hops after which the line search restarted (restart_on_failure)
   std::vector<Push> pushes;
 
   /// Counts a completed hop: hops, final cost and I4, accepted/rejected, the first converged

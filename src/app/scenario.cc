@@ -156,7 +156,8 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   CheckAttributes(path, e,
                   {"c", "gamma", "epsilon", "alpha_min", "max_duration_step", "regularization",
                    "alpha_initial", "cyclic_value", "terminal", "reference",
-                   "alpha_after_accept", "delta_i", "initial_hops"});
+                   "alpha_after_accept", "delta_i", "initial_hops", "preset"});
+  if (auto v = OptionalChoice(path, e, "preset", "default", "paper")) l->paper = *v == "paper";
   l->c = OptionalDouble(path, e, "c");
   l->gamma = OptionalDouble(path, e, "gamma");
   l->epsilon = OptionalDouble(path, e, "epsilon");

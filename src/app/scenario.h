@@ -39,6 +39,8 @@ struct ModelNumbers {
 
 /// Algorithm 1 settings a scenario may override (LearnerSettings; unset = the plugin default).
 struct LearningOverrides {
+  bool paper = false;  // preset="paper": HopperPaperLearnerSettings, cyclic 0, terminal time, own
+
   std::optional<double> c;                  // sufficient-decrease constant of (36)
   std::optional<double> gamma;              // backtracking factor
   std::optional<double> epsilon;            // convergence threshold on int|du|^2 + |dT|^2

@@ -18,15 +18,29 @@ LearnerSettings HopperLearnerSettings() {
   s.backward.psd_switching_hessians = true;
   s.backward.box_aware = false;
   s.backward.time_curvature = false;
+  s.backward.cyclic_value = 0.99;
+  s.backward.terminal_event = true;
   s.alpha_initial = 0.1;
+  s.start_correction = false;
+  s.restart_on_failure = true;
   return s;
 }
 
-TrialDriverSettings HopperTrialSettings() {
+LearnerSettings HopperPaperLearnerSettings() {
+  LearnerSettings s = LearnerSettings::Paper();
+  s.c = 1e-7;
+  s.alpha_initial = 0.1;
+  s.regularization_min = 0.01;
+  s.backward.integrator = BackwardIntegrator::kRk4;
+  s.backward.psd_switching_hessians = true;
+  return s;
+}
+
+TrialDriverSettings HopperTrialSettings(Preset preset) {
   TrialDriverSettings s;
   s.method = Method::kAlg1;
   s.warmup_trials = 3;
-  s.learner = HopperLearnerSettings();
+  s.learner = preset == Preset::kPaper ? HopperPaperLearnerSettings() : HopperLearnerSettings();
   return s;
 }
 

@@ -15,16 +15,26 @@
 
 namespace ddoc {
 
-/// Algorithm 1 on the hopper: the engine's default preset LearnerSettings{} with these overrides
-/// (why, with the measurements, in docs/hopper.md "Learner settings"): the paper's (36) with
-/// c = 1e-7, gamma = 0.5, plain backtracking and its step test; alpha_initial = 0.1, growing by
-/// 1/gamma after an accepted trial (kGrow); regularization_min = 0.01; RK4 pass with PSD
-/// switching Hessians; box_aware = false and time_curvature = false.
+/// Algorithm 1 on the hopper, the default: the engine's LearnerSettings{} with these overrides
+/// (why, with the measurements, in docs/hopper.md "Learner settings" and docs/robustness_map.md):
+/// the paper's (36) with c = 1e-7, gamma = 0.5, plain backtracking and its step test;
+/// alpha_initial = 0.1, growing by 1/gamma after an accepted trial (kGrow); the line search
+/// restarts instead of terminating (restart_on_failure); no start correction;
+/// regularization_min = 0.01; RK4 pass with PSD switching Hessians, box_aware = false,
+/// time_curvature = false, the periodic value cyclic_value = 0.99 and the terminal condition
+/// through the takeoff event (terminal_event).
 LearnerSettings HopperLearnerSettings();
 
+/// The `paper` preset on the hopper: LearnerSettings::Paper() with the hopper's scales
+/// (c = 1e-7, alpha_initial = 0.1, regularization_min = 0.01) and the RK4 pass with PSD
+/// switching Hessians; with ControllerConfig::anchor_reference = false it is Algorithm 1 as
+/// printed.
+LearnerSettings HopperPaperLearnerSettings();
+
 /// The trial driver on the hopper: Algorithm 1, 3 warm-up hops (hop 0 starts on the model gait's
-/// state, not on the robot's own cycle), learner = HopperLearnerSettings().
-TrialDriverSettings HopperTrialSettings();
+/// state, not on the robot's own cycle), learner = HopperLearnerSettings() (kDefault) or
+/// HopperPaperLearnerSettings() (kPaper).
+TrialDriverSettings HopperTrialSettings(Preset preset = Preset::kDefault);
 
 /// Duration bounds of the hopper's modes (Bounds::duration_min/max), s.
 struct HopperModeDurations {
