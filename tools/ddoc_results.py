@@ -25,6 +25,7 @@ import math
 import os
 import re
 import sys
+import threading
 
 import numpy as np
 
@@ -338,7 +339,7 @@ def _write_if_changed(path, text):
                 return
     except OSError:
         pass
-    tmp = f"{path}.{os.getpid()}.tmp"
+    tmp = f"{path}.{os.getpid()}.{threading.get_ident()}.tmp"
     with open(tmp, "w") as f:
         f.write(text)
     os.replace(tmp, path)
