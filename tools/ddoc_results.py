@@ -23,7 +23,9 @@ import io
 import json
 import math
 import os
+import re
 import sys
+import threading
 
 import numpy as np
 
@@ -287,6 +289,63 @@ def load_run(path, need_trajectory=False, label=None):
 
 
 # ---------------------------------------------------------------------------------------------------
+# Inputs of the sweep tools (tools/mass_sweep, tools/robustness_map)
+# ---------------------------------------------------------------------------------------------------
+
+MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "models")
+
+
+def label(value):
+    """A number as it appears in case names: 10, 10.5, 0.01."""
+    return f"{value:g}"
+
+
+def copy_shared_robot_files(out_dir):
+    """The variant-independent MJCF files that every generated robot includes (OUT_DIR/robots)."""
+    robots = os.path.join(out_dir, "robots")
+    os.makedirs(robots, exist_ok=True)
+    for shared in ("hopper_common.xml", "hopper_limbs.xml"):
+        with open(os.path.join(MODELS, shared)) as f:
+            text = f.read()
+        _write_if_changed(os.path.join(robots, shared), text)
+
+
+def write_robot(out_dir, mass, drag, name=None):
+    """A robot variant OUT_DIR/robots/<name>.xml (default name hopper_m<mass>):
+    models/hopper_m12.xml with the mass and the drag c_d replaced. Returns its path."""
+    with open(os.path.join(MODELS, "hopper_m12.xml")) as f:
+        text = f.read()
+    text, n_mass = re.subn(r'mass="[^"]*"', f'mass="{mass!r}"', text)
+    text, n_drag = re.subn(r'(<numeric name="drag_cd" data=")[^"]*(")', rf'\g<1>{drag!r}\g<2>', text)
+    if n_mass != 1 or n_drag != 1:
+        raise RuntimeError("models/hopper_m12.xml changed shape: expected one mass= and one drag_cd")
+    name = name or robot_name(mass)
+    text = text.replace('model="hopper_m12"', f'model="{name}"')
+    path = os.path.join(out_dir, "robots", name + ".xml")
+    _write_if_changed(path, text)
+    return path
+
+
+def robot_name(mass, drag=None):
+    """hopper_m<mass> (mass_sweep's name, one drag per sweep) or hopper_m<mass>_cd<drag>."""
+    return f"hopper_m{label(mass)}" + ("" if drag is None else f"_cd{label(drag)}")
+
+
+def _write_if_changed(path, text):
+    """Writes text to path unless it already holds exactly that (parallel slices may share OUT)."""
+    try:
+        with open(path) as f:
+            if f.read() == text:
+                return
+    except OSError:
+        pass
+    tmp = f"{path}.{os.getpid()}.{threading.get_ident()}.tmp"
+    with open(tmp, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+# ---------------------------------------------------------------------------------------------------
 # Derived quantities
 # ---------------------------------------------------------------------------------------------------
 
@@ -441,7 +500,9 @@ def push_recovery(run, tolerance=RECOVERY_TOLERANCE, baseline_hops=RECOVERY_BASE
 
 
 def _scheduled_pushes(run):
-    """The pushes the scenario scheduled [(t_start, t_end, force)], from summary.json."""
+    """The pushes the scenario scheduled [(t_start, t_end, force)], from summary.json: "pushes"
+    (timed ones and the pushes by hop phase whose hop started), then the pushes by hop phase whose
+    hop never started ("hop_pushes" with t null), with t_start = t_end = nan (never reached)."""
     out = []
     for p in run.summary.get("pushes") or []:
         try:
@@ -449,6 +510,9 @@ def _scheduled_pushes(run):
             out.append((t0, t0 + float(p.get("duration", 0.0)), float(p.get("force", math.nan))))
         except (KeyError, TypeError, ValueError):
             warn(f"{run.path}/summary.json: push entry {p!r} lacks t/duration/force, ignored")
+    for p in run.summary.get("hop_pushes") or []:
+        if isinstance(p, dict) and p.get("t") is None:
+            out.append((math.nan, math.nan, float(p.get("force", math.nan))))
     return out
 
 

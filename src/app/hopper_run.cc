@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -117,7 +118,9 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
   cli->add_option("--robot", robot, "robot MJCF (overrides the scenario)");
   cli->add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
-  cli->add_option("--push", pushes, "extra push TIME,FORCE,DURATION (s, N, s; repeatable)");
+  cli->add_option("--push", pushes,
+                  "extra push TIME,FORCE,DURATION (s, N, s), or HOP@PHASE,FORCE,DURATION by the "
+                  "phase of a hop (repeatable)");
 }
 
 namespace {
@@ -142,8 +145,17 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   if (o.seconds && !o.hops) s.hops = 0;
   if (!o.robot.empty()) s.robot_mjcf = o.robot;
   if (!o.model_mjcf.empty()) s.model_mjcf = o.model_mjcf;
-  if (o.no_pushes) s.pushes.clear();
-  for (const std::string& p : o.pushes) s.pushes.push_back(ParsePush(p));
+  if (o.no_pushes) {
+    s.pushes.clear();
+    s.hop_pushes.clear();
+  }
+  for (const std::string& p : o.pushes) {
+    if (p.find('@') != std::string::npos) {
+      s.hop_pushes.push_back(ParseHopPush(p));
+    } else {
+      s.pushes.push_back(ParsePush(p));
+    }
+  }
   ValidateScenario(s);
   return s;
 }
@@ -175,7 +187,9 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   return run;
 }
 
-RunStepper::RunStepper(LoadedRun* run) : run_(run) {
+RunStepper::RunStepper(LoadedRun* run)
+    : run_(run), pushes_now_(run->scenario.pushes),
+      hop_push_times_(run->scenario.hop_pushes.size()) {
   plugin::Attach(run->controller.get());
   Restarted();
 }
@@ -185,15 +199,36 @@ RunStepper::~RunStepper() { plugin::Detach(); }
 void RunStepper::Restarted() {
   phase_start_ = run_->data->time;
   mode_ = run_->controller->mode();
+  hop_ = run_->controller->hop();
+  hop_start_ = run_->data->time;
+}
+
+void RunStepper::HopStarted(double t_start) {
+  const double previous = t_start - hop_start_;  // the previous hop, takeoff to takeoff
+  hop_start_ = t_start;
+  const std::vector<HopPush>& hop_pushes = run_->scenario.hop_pushes;
+  for (size_t i = 0; i < hop_pushes.size(); ++i) {
+    const HopPush& p = hop_pushes[i];
+    if (p.hop != hop_ || hop_push_times_[i]) continue;
+    // The step that detected the takeoff has been taken: a push acts from the next step on.
+    const double t = std::max(t_start + p.phase * previous, run_->data->time);
+    hop_push_times_[i] = t;
+    pushes_now_.push_back({t, p.force, p.duration});
+  }
 }
 
 StepOutcome RunStepper::Step() {
   const mjModel* m = run_->model.get();
   mjData* d = run_->data.get();
   plugin::HopperController& c = *run_->controller;
-  push_ = pushes_ ? PushForce(run_->scenario.pushes, d->time) : 0.0;
+  push_ = pushes_ ? PushForce(pushes_now_, d->time) : 0.0;
   ApplyDragAndPush(c.mapping(), m, d, push_);
+  const double t_before = d->time;
   mj_step(m, d);
+  if (c.hop() != hop_) {  // the takeoff at the control of this step began hop c.hop()
+    hop_ = c.hop();
+    HopStarted(t_before);
+  }
   if (c.offline_pending()) c.RunOffline();  // between steps, outside mjcb_control
   if (c.failed()) return {StepOutcome::Kind::kFailed, c.error()};
   x_ = FlightState(c.mapping(), d, c.vsa());

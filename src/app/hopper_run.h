@@ -117,16 +117,28 @@ class RunStepper {
   /// Pushes act (default) or not.
   void set_pushes(bool on) { pushes_ = on; }
   double push() const { return push_; }  ///< the push force of the last step, N
+  /// The scenario's timed pushes, then its hop pushes in the order they were resolved (at the
+  /// start of their hop: hop start + phase x the previous hop's duration, takeoff to takeoff,
+  /// and not before the step after the takeoff).
+  const std::vector<Push>& pushes() const { return pushes_now_; }
+  /// Per scenario hop push: its start time once its hop has started.
+  const std::vector<std::optional<double>>& hop_push_times() const { return hop_push_times_; }
   /// Flight coordinates of the state after the last step.
   const Eigen::Matrix<double, 14, 1>& state() const { return x_; }
 
  private:
+  void HopStarted(double t_start);
+
   LoadedRun* run_;
   FallLimits limits_;
   bool pushes_ = true;
   double push_ = 0.0;
   int mode_ = hopper::kFlight;
   double phase_start_ = 0.0;
+  int hop_ = 0;             // the controller's hop after the last step
+  double hop_start_ = 0.0;  // when it started (the takeoff's step), s
+  std::vector<Push> pushes_now_;
+  std::vector<std::optional<double>> hop_push_times_;
   Eigen::Matrix<double, 14, 1> x_ = Eigen::Matrix<double, 14, 1>::Zero();
 };
 

@@ -155,8 +155,6 @@ class HopperRun {
 
 HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* frames)
     : o_(o), run_(run), log_(log), frames_(frames), stepper_(run),
-      push_started_(run->scenario.pushes.size(), false),
-      push_ended_(run->scenario.pushes.size(), false),
       progress_(!o.quiet && isatty(STDERR_FILENO)) {
   const Scenario& s = run->scenario;
   summary_.scenario = s.name;
@@ -165,6 +163,8 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
   summary_.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
   summary_.offline_latency_s = run->config.offline_latency;
   summary_.pushes = s.pushes;
+  summary_.hop_pushes = s.hop_pushes;
+  summary_.hop_push_times = stepper_.hop_push_times();
   log_->WriteSummary(summary_);
 }
 
@@ -226,7 +226,14 @@ void HopperRun::LogStep() {
 }
 
 void HopperRun::LogPushEvents() {
-  const std::vector<Push>& pushes = run_->scenario.pushes;
+  const std::vector<Push>& pushes = stepper_.pushes();  // grows when a hop push is resolved
+  if (pushes.size() != push_started_.size()) {
+    push_started_.resize(pushes.size(), false);
+    push_ended_.resize(pushes.size(), false);
+    summary_.pushes = pushes;
+    summary_.hop_push_times = stepper_.hop_push_times();
+    log_->WriteSummary(summary_);
+  }
   const double t = run_->data->time;
   const Eigen::Matrix<double, 14, 1>& x = stepper_.state();
   for (size_t i = 0; i < pushes.size(); ++i) {

@@ -117,6 +117,17 @@ void RunLog::WriteSummary(const Summary& s) {
   for (const Push& p : s.pushes) {
     j["pushes"].push_back({{"t", p.time}, {"force", p.force}, {"duration", p.duration}});
   }
+  j["hop_pushes"] = nlohmann::json::array();
+  for (size_t i = 0; i < s.hop_pushes.size(); ++i) {
+    const HopPush& p = s.hop_pushes[i];
+    const bool resolved = i < s.hop_push_times.size() && s.hop_push_times[i];
+    j["hop_pushes"].push_back({{"hop", p.hop},
+                               {"phase", p.phase},
+                               {"force", p.force},
+                               {"duration", p.duration},
+                               {"t", resolved ? nlohmann::json(*s.hop_push_times[i])
+                                              : nlohmann::json()}});
+  }
   const std::string tmp = dir_ + "/summary.json.tmp";
   {
     std::ofstream out(tmp);

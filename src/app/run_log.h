@@ -7,6 +7,7 @@
 #define DDOC_APP_RUN_LOG_H_
 
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,7 +48,9 @@ struct Summary {
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
   int restarts = 0;  // hops after which the line search restarted (restart_on_failure)
-  std::vector<Push> pushes;
+  std::vector<Push> pushes;          // timed pushes, then the hop pushes resolved so far
+  std::vector<HopPush> hop_pushes;   // the scenario's pushes by hop phase
+  std::vector<std::optional<double>> hop_push_times;  // their start, once resolved
 
   /// Counts a completed hop: hops, final cost and I4, accepted/rejected, the first converged
   /// and line-search-stopped hops, the learner status ("none" when `learns` is false), means.

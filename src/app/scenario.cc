@@ -179,6 +179,27 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   l->initial_hops = OptionalCount(path, e, "initial_hops");
 }
 
+// <push time=.../> or <push hop=... phase=.../>, with force and duration.
+void ParsePushElement(const std::string& path, const Element* e, Scenario* s) {
+  CheckAttributes(path, e, {"time", "hop", "phase", "force", "duration"});
+  const bool by_time = e->Attribute("time") != nullptr;
+  if (by_time == (e->Attribute("hop") != nullptr || e->Attribute("phase") != nullptr)) {
+    Fail(path, e->GetLineNum(), "<push> needs either time or hop and phase");
+  }
+  const double force = RequiredDouble(path, e, "force");
+  const double duration = RequiredDouble(path, e, "duration");
+  if (by_time) {
+    s->pushes.push_back({RequiredDouble(path, e, "time"), force, duration});
+    return;
+  }
+  const double hop = RequiredDouble(path, e, "hop");
+  if (hop != std::floor(hop) || hop < 1 || hop > 1e9) {
+    Fail(path, e->GetLineNum(), "<push> hop must be an integer >= 1");
+  }
+  s->hop_pushes.push_back({static_cast<int>(hop), RequiredDouble(path, e, "phase"), force,
+                           duration});
+}
+
 // One child element of <ddoc_scenario>.
 void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   const std::string tag = e->Name();
@@ -202,9 +223,7 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   } else if (tag == "duration") {
     ParseDuration(path, e, s);
   } else if (tag == "push") {
-    CheckAttributes(path, e, {"time", "force", "duration"});
-    s->pushes.push_back({RequiredDouble(path, e, "time"), RequiredDouble(path, e, "force"),
-                         RequiredDouble(path, e, "duration")});
+    ParsePushElement(path, e, s);
   } else if (tag == "learning") {
     ParseLearning(path, e, &s->learning);
   } else if (tag == "experiment") {
@@ -243,6 +262,9 @@ Scenario LoadScenario(const std::string& path) {
   }
   std::sort(s.pushes.begin(), s.pushes.end(),
             [](const Push& a, const Push& b) { return a.time < b.time; });
+  std::stable_sort(s.hop_pushes.begin(), s.hop_pushes.end(), [](const HopPush& a, const HopPush& b) {
+    return a.hop < b.hop || (a.hop == b.hop && a.phase < b.phase);
+  });
   ValidateScenario(s);
   return s;
 }
@@ -305,6 +327,11 @@ void ValidateScenario(const Scenario& s) {
     if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
     if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");
   }
+  for (const HopPush& p : s.hop_pushes) {
+    if (p.hop < 1) Fail(f, 0, "push hop must be >= 1 (hop 0 has no previous hop)");
+    if (!(p.phase >= 0.0 && p.phase < 1.0)) Fail(f, 0, "push phase must be in [0, 1)");
+    if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");
+  }
 }
 
 Push ParsePush(const std::string& text) {
@@ -318,6 +345,24 @@ Push ParsePush(const std::string& text) {
   if (!(p.time >= 0.0) || !(p.duration > 0.0) || !std::isfinite(p.force)) {
     throw ScenarioError("--push \"" + text + "\": time must be >= 0 and duration > 0");
   }
+  return p;
+}
+
+HopPush ParseHopPush(const std::string& text) {
+  HopPush p;
+  double hop = 0.0;
+  char at = 0, c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> hop >> at >> p.phase >> c1 >> p.force >> c2 >> p.duration) || at != '@' ||
+      c1 != ',' || c2 != ',' || !in.eof() && (in >> std::ws, !in.eof())) {
+    throw ScenarioError("--push \"" + text + "\": expected HOP@PHASE,FORCE,DURATION");
+  }
+  if (hop != std::floor(hop) || !(hop >= 1 && hop <= 1e9) || !(p.phase >= 0.0 && p.phase < 1.0) ||
+      !(p.duration > 0.0) || !std::isfinite(p.force)) {
+    throw ScenarioError("--push \"" + text +
+                        "\": hop must be an integer >= 1, phase in [0, 1) and duration > 0");
+  }
+  p.hop = static_cast<int>(hop);
   return p;
 }
 

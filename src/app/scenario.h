@@ -64,6 +64,16 @@ struct ExperimentOverrides {
   std::optional<int> from_hop;                  // PitchFeedbackExperiment::from_hop, >= 1
 };
 
+/// A push placed by the phase of a hop: it starts phase x (the previous hop's duration, takeoff to
+/// takeoff) after hop `hop` starts (its takeoff, hops.csv t_start), and is resolved to a Push when
+/// that hop starts (RunStepper). <push hop="15" phase="0.375" force=".." duration=".."/>.
+struct HopPush {
+  int hop = 1;            ///< >= 1 (hop 0 has no previous hop)
+  double phase = 0.0;     ///< in [0, 1)
+  double force = 0.0;     ///< N
+  double duration = 0.1;  ///< s, > 0
+};
+
 /// Everything one run needs. Paths are absolute or relative to the current directory
 /// (relative paths in the file are resolved against the scenario file's folder).
 struct Scenario {
@@ -76,6 +86,7 @@ struct Scenario {
   int hops = 100;                    // stop after this many hops (0 = use seconds)
   double seconds = 0.0;              // stop after this simulated time (0 = use hops)
   std::vector<Push> pushes;          // in time order
+  std::vector<HopPush> hop_pushes;   // in (hop, phase) order
   double forward_speed = 0.0;        // forward speed of the nominal gait [m/s]
   // Constant stiffness commands of the nominal gait (NominalGaitSettings; unset = 50 N m/rad and
   // 2000 N/m). They must lie in the input bounds [10, 150] and [1780, 2350].
@@ -92,6 +103,9 @@ void ValidateScenario(const Scenario& scenario);
 
 /// Parses "TIME,FORCE,DURATION" (the --push format of every executable). Throws ScenarioError.
 Push ParsePush(const std::string& text);
+
+/// Parses "HOP@PHASE,FORCE,DURATION" (ddoc-hopper's --push by hop phase). Throws ScenarioError.
+HopPush ParseHopPush(const std::string& text);
 
 }  // namespace ddoc::app
 

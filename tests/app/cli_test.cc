@@ -89,6 +89,8 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --method ppo", "unknown method \"ppo\""},
       {good + " --hops -3", "hops must be >= 0"},
       {good + " --push 1,2", "TIME,FORCE,DURATION"},
+      {good + " --push 0@0.5,1,0.1", "hop must be an integer >= 1"},
+      {good + " --push 3@0.5", "HOP@PHASE,FORCE,DURATION"},
       {good + " --robot " + Out("bad_robot.xml"), "bad_robot.xml"},
       {good + " --robot " + Out("nope.xml"), "nope.xml"},
       {good + " --out /proc/ddoc_no/out", "/proc/ddoc_no/out"},
@@ -158,6 +160,63 @@ TEST_F(CliTest, AFallExitsThreeAndKeepsTheLogs) {
   for (const auto& e : events) push = push || e.find("push_start") != std::string::npos;
   EXPECT_TRUE(push);
   EXPECT_GT(Lines(ReadFile(dir_ / "run" / "trajectory.csv")).size(), 100u);
+}
+
+// Column `col` of the CSV rows (header skipped) whose column `key_col` equals `key`.
+std::vector<double> Column(const std::vector<std::string>& lines, int col, int key_col = -1,
+                           const std::string& key = "") {
+  std::vector<double> out;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    std::vector<std::string> f;
+    std::istringstream row(lines[i]);
+    for (std::string v; std::getline(row, v, ',');) f.push_back(v);
+    if (key_col >= 0 && (static_cast<int>(f.size()) <= key_col || f[key_col] != key)) continue;
+    out.push_back(std::stod(f.at(col)));
+  }
+  return out;
+}
+
+TEST_F(CliTest, PushByHopPhaseStartsAtThatFractionOfTheHop) {
+  // Hop 3 starts at hops.csv t_start[3]; the previous hop lasted t_start[3] - t_start[2]. A push at
+  // phase 0.5 (scenario) starts half of that after t_start[3], one at phase 0 (--push 4@0,...) at
+  // the first physics step after the takeoff that starts hop 4 (0.5 ms). events.csv logs each
+  // push_start in its hop at the end of the step before the one the force acts in, so it lies
+  // within one step after the intended time; trajectory.csv shows the force.
+  const double dt = 0.0005;
+  std::ofstream(dir_ / "phase.xml")
+      << "<ddoc_scenario name='phase'><robot mjcf='" << DDOC_MODELS_DIR << "/hopper_m8.xml'/>"
+      << "<model M='10' c_d='0'/><method name='ocfb'/><duration hops='6'/><gait speed='0.5'/>"
+      << "<push hop='3' phase='0.5' force='7' duration='0.05'/></ddoc_scenario>";
+  const Result r = RunCli(Out("phase.xml") + " --push 4@0,-9,0.05 --out " + Out("run"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::vector<std::string> hops = Lines(ReadFile(dir_ / "run" / "hops.csv"));
+  const std::vector<std::string> events = Lines(ReadFile(dir_ / "run" / "events.csv"));
+  const std::vector<double> t_start = Column(hops, 1);
+  ASSERT_EQ(t_start.size(), 6u);
+  const std::vector<double> starts = Column(events, 0, 2, "push_start");
+  const std::vector<double> start_hops = Column(events, 1, 2, "push_start");
+  ASSERT_EQ(starts.size(), 2u) << ReadFile(dir_ / "run" / "events.csv");
+  const double want3 = t_start[3] + 0.5 * (t_start[3] - t_start[2]);
+  EXPECT_GE(starts[0], want3 - 1e-6);
+  EXPECT_LE(starts[0], want3 + dt + 1e-6);
+  EXPECT_EQ(start_hops[0], 3.0);
+  EXPECT_NEAR(starts[1], t_start[4] + dt, 1e-6);
+  EXPECT_EQ(start_hops[1], 4.0);
+  // The force acts from the first logged sample at or after push_start, for 0.05 s.
+  const std::vector<std::string> traj = Lines(ReadFile(dir_ / "run" / "trajectory.csv"));
+  const std::vector<double> t = Column(traj, 0), push = Column(traj, 21);
+  double first7 = -1, first9 = -1, last7 = -1;
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (push[i] == 7 && first7 < 0) first7 = t[i];
+    if (push[i] == 7) last7 = t[i];
+    if (push[i] == -9 && first9 < 0) first9 = t[i];
+  }
+  EXPECT_NEAR(first7, starts[0] + dt, 1e-6);
+  EXPECT_NEAR(last7 - first7, 0.05 - dt, dt + 1e-6);
+  EXPECT_NEAR(first9, starts[1] + dt, 1e-6);
+  const std::string summary = ReadFile(dir_ / "run" / "summary.json");
+  EXPECT_NE(summary.find("\"hop_pushes\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"phase\": 0.5"), std::string::npos) << summary;
 }
 
 TEST_F(CliTest, ShortRunWritesEveryFile) {

@@ -194,6 +194,49 @@ TEST(ParsePushTest, AcceptsTripletsOnly) {
   EXPECT_THROW(ParsePush("1,2,3,4"), ScenarioError);
 }
 
+TEST_F(ScenarioTest, PushByHopPhase) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/>%s</ddoc_scenario>";
+  Scenario s = LoadScenario(Write(Fill(
+      fmt, "<push hop='30' phase='0.5' force='25' duration='0.2'/>"
+           "<push hop='15' phase='0.375' force='-20' duration='0.1'/>"
+           "<push time='2' force='5' duration='0.1'/>")));
+  ASSERT_EQ(s.pushes.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.pushes[0].time, 2.0);
+  ASSERT_EQ(s.hop_pushes.size(), 2u);
+  EXPECT_EQ(s.hop_pushes[0].hop, 15);  // sorted by hop
+  EXPECT_DOUBLE_EQ(s.hop_pushes[0].phase, 0.375);
+  EXPECT_DOUBLE_EQ(s.hop_pushes[0].force, -20.0);
+  EXPECT_DOUBLE_EQ(s.hop_pushes[0].duration, 0.1);
+  EXPECT_EQ(s.hop_pushes[1].hop, 30);
+  ExpectError(Fill(fmt, "<push time='1' hop='3' phase='0' force='2' duration='0.1'/>"),
+              {"either time or hop and phase"});
+  ExpectError(Fill(fmt, "<push force='2' duration='0.1'/>"), {"either time or hop and phase"});
+  ExpectError(Fill(fmt, "<push hop='3' force='2' duration='0.1'/>"), {"<push>", "phase"});
+  ExpectError(Fill(fmt, "<push phase='0.5' force='2' duration='0.1'/>"), {"<push>", "hop"});
+  ExpectError(Fill(fmt, "<push hop='0' phase='0' force='2' duration='0.1'/>"),
+              {"hop must be an integer >= 1"});
+  ExpectError(Fill(fmt, "<push hop='2.5' phase='0' force='2' duration='0.1'/>"),
+              {"hop must be an integer >= 1"});
+  ExpectError(Fill(fmt, "<push hop='3' phase='1' force='2' duration='0.1'/>"),
+              {"phase must be in [0, 1)"});
+  ExpectError(Fill(fmt, "<push hop='3' phase='-0.1' force='2' duration='0.1'/>"),
+              {"phase must be in [0, 1)"});
+  ExpectError(Fill(fmt, "<push hop='3' phase='0.5' force='2' duration='0'/>"),
+              {"push duration must be > 0"});
+}
+
+TEST(ParsePushTest, ByHopPhase) {
+  const HopPush p = ParseHopPush("30@0.375,-20,0.2");
+  EXPECT_EQ(p.hop, 30);
+  EXPECT_DOUBLE_EQ(p.phase, 0.375);
+  EXPECT_DOUBLE_EQ(p.force, -20.0);
+  EXPECT_DOUBLE_EQ(p.duration, 0.2);
+  for (const char* bad : {"30,0.375,-20,0.2", "30@0.375,-20", "0@0.5,1,0.1", "3.5@0.5,1,0.1",
+                          "3@1,1,0.1", "3@0.5,1,0", "3@0.5,1,0.1,4"}) {
+    EXPECT_THROW(ParseHopPush(bad), ScenarioError) << bad;
+  }
+}
+
 TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
   const fs::path dir = fs::temp_directory_path() / "ddoc_runlog_test";
   fs::remove_all(dir);

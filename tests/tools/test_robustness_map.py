@@ -1,0 +1,272 @@
+"""tools/robustness_map: the shards of a grid are a partition of it, merging shards gives the bytes of
+an unsharded run, the Slurm array body runs the slice of its task, bad usage names what is wrong,
+the summary counts what the CSV says; most with the fake ddoc-hopper, one short run with the real one
+(DDOC_HOPPER, set by CMake)."""
+import csv
+import filecmp
+import importlib.machinery
+import importlib.util
+import json
+import os
+import subprocess
+import unittest
+
+from tools_test_util import HERE, PYTHON, ROOT, TOOLS, TempDirTest, run_tool
+
+HOPPER = os.environ.get("DDOC_HOPPER", "")
+FAKE = os.path.join(HERE, "fake_ddoc_hopper.py")
+
+
+def load_tool():
+    loader = importlib.machinery.SourceFileLoader("robustness_map",
+                                                  os.path.join(TOOLS, "robustness_map"))
+    spec = importlib.util.spec_from_loader("robustness_map", loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+rm = load_tool()
+
+# A small grid for the fake: 2 x 2 x 1 mass conditions and 1 x 1 x 2 x 2 pushes, 3 methods = 24 cases.
+SMALL = ["--hops", "12", "--masses", "8,12", "--drags", "0,0.01", "--speeds", "0.5",
+         "--robots", "12", "--durations", "0.1", "--forces", "-20,20", "--phases", "0,0.5",
+         "--push-hop", "5", "--hopper", FAKE, "--jobs", "2"]
+
+
+def read(path):
+    with open(path, "rb") as f:
+        return f.read()
+
+
+def csv_rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+class GridTest(unittest.TestCase):
+    def grid(self, *args):
+        return rm.grid_from_args(rm.run_parser().parse_args(rm.join_negative_values(list(args))))
+
+    def test_the_default_grid_is_the_issues(self):
+        names = [n for _, n, _ in rm.cases(self.grid())]
+        mass = [n for n in names if n.startswith("mass_")]
+        push = [n for n in names if n.startswith("push_")]
+        self.assertEqual(len(mass), 7 * 3 * 3 * 3)         # 63 conditions x 3 methods
+        self.assertEqual(len(push), 2 * 9 * 3 * 8 * 3)     # robots x forces x durations x phases
+        self.assertEqual(len(set(names)), len(names))
+        self.assertIn("mass_m13_cd0.02_v0.7_mrl", mass)
+        self.assertIn("push_m8_d0.05_f-40_p0.875_ocfb", push)
+        self.assertEqual(mass[:3], ["mass_m7_cd0_v0.3_alg1", "mass_m7_cd0_v0.3_ocfb",
+                                    "mass_m7_cd0_v0.3_mrl"])
+
+    def test_shards_partition_the_grid(self):
+        full = rm.cases(self.grid())
+        for n in (1, 2, 7, 16):
+            with self.subTest(n=n):
+                slices = [rm.shard_cases(full, (i, n)) for i in range(n)]
+                union = [c for s in slices for c in s]
+                self.assertEqual(len(union), len(full))                        # no overlap
+                self.assertEqual(sorted(c[1] for c in union), sorted(c[1] for c in full))
+                self.assertLessEqual(max(map(len, slices)) - min(map(len, slices)), 1)
+        # Deterministic: the same slice twice, and slice 1/4 holds cases 1, 5, 9, ...
+        self.assertEqual(rm.shard_cases(full, (1, 4)), rm.shard_cases(rm.cases(self.grid()), (1, 4)))
+        self.assertEqual([c[1] for c in rm.shard_cases(full, (1, 4))][:2], [full[1][1], full[5][1]])
+
+    def test_negative_forces_need_no_equals_sign(self):
+        g = self.grid("--forces", "-40,-10,30")
+        self.assertEqual(g["push"]["forces"], [-40.0, -10.0, 30.0])
+
+
+class SummaryTest(TempDirTest):
+    """summary.md of a hand-written map directory: counts checked by hand."""
+
+    def test_counts(self):
+        grid = self.grid()
+        rows = {}
+        # Condition (mass, cd 0, 0.5): alg1 and ocfb both survive in 3 of 4 masses; alg1 cheaper
+        # or equal in 2 of them (7: 1.0 < 1.1, 8: 1.2 = 1.2, 9: 1.5 > 1.3); mass 10: ocfb fell.
+        costs = {7: (1.0, 1.1), 8: (1.2, 1.2), 9: (1.5, 1.3), 10: (2.0, None)}
+        for _, name, keys in rm.cases(grid):
+            m = int(keys["mass"])
+            a, o = costs[m]
+            cost = {"alg1": a, "ocfb": o, "mrl": None}[keys["method"]]
+            rows[name] = {c: "" for c in rm.csv_columns("mass")}
+            rows[name].update(case=name, mass=str(m), c_d="0", speed="0.5", method=keys["method"],
+                              exit="0" if cost else "3", hops="100" if cost else "7",
+                              survived="1" if cost else "0", fall_hop="" if cost else "7",
+                              cost_last10="" if cost is None else repr(cost),
+                              learner_status="running")
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            text = f.read()
+        self.assertIn("| alg1 | 4/4 |", text)
+        self.assertIn("| ocfb | 3/4 |", text)
+        self.assertIn("| mrl | 0/4 |", text)
+        self.assertIn("both survive in 3 of 4 conditions; Alg1's last-10 cost <= OC-FB's in 2 of "
+                      "those 3 (67 %)", text)
+        self.assertIn("| 10 | 0 | 0.5 | 100, 2 | fell @7 | fell @7 |", text)
+        self.assertNotIn("Targets of issue 19", text)  # not the full grid
+        for method in ("alg1", "ocfb", "mrl"):
+            self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
+                                                        f"mass_{method}.png")))
+
+    def grid(self):
+        return rm.grid_from_args(rm.run_parser().parse_args(
+            ["--maps", "mass", "--masses", "7,8,9,10", "--drags", "0", "--speeds", "0.5"]))
+
+
+class ShardMergeTest(TempDirTest):
+    def run_map(self, out, *extra):
+        r = run_tool("robustness_map", *SMALL, "--out", out, *extra)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return r
+
+    def test_merge_of_shards_is_the_unsharded_map(self):
+        whole = os.path.join(self.tmp, "whole")
+        r = self.run_map(whole)
+        self.assertRegex(r.stderr, r"24/24 done, elapsed \d+:\d\d:\d\d, ETA")
+        slices = [os.path.join(self.tmp, f"s{i}") for i in range(3)]
+        names = []
+        for i, d in enumerate(slices):
+            self.run_map(d, "--shard", f"{i}/3")
+            with open(os.path.join(d, "manifest.json")) as f:
+                names += json.load(f)["cases"]
+            self.assertFalse(os.path.exists(os.path.join(d, "summary.md")))  # only whole maps
+        self.assertEqual(len(names), 24)
+        self.assertEqual(len(set(names)), 24)
+        merged = os.path.join(self.tmp, "merged")
+        r = run_tool("robustness_map", "merge", *reversed(slices), "--out", merged)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for name in ("mass_map.csv", "push_map.csv", "manifest.json", "summary.md"):
+            self.assertEqual(read(os.path.join(merged, name)), read(os.path.join(whole, name)),
+                             name)
+        rows = csv_rows(os.path.join(whole, "mass_map.csv"))
+        self.assertEqual(len(rows), 12)
+        self.assertEqual([(r["mass"], r["c_d"], r["method"]) for r in rows[:4]],
+                         [("8", "0", "alg1"), ("8", "0", "ocfb"), ("8", "0", "mrl"),
+                          ("8", "0.01", "alg1")])
+        # The fake: alg1 and mrl copy a 12-hop run that survives, ocfb one that falls in hop 4.
+        self.assertEqual([(r["survived"], r["fall_hop"], r["exit"]) for r in rows[:2]],
+                         [("1", "", "0"), ("0", "4", "3")])
+        push = csv_rows(os.path.join(whole, "push_map.csv"))
+        self.assertEqual(push[1]["push_status"], "not reached")  # ocfb fell before hop 5
+        with open(os.path.join(whole, "scenarios", "push_m12_d0.1_f-20_p0.5_alg1.xml")) as f:
+            self.assertIn('<push hop="5" phase="0.5" force="-20.0" duration="0.1"/>', f.read())
+        with open(os.path.join(whole, "runs", "mass_m12_cd0.01_v0.5_mrl", "argv.txt")) as f:
+            argv = f.read().split("\n")
+        self.assertEqual(argv[1:5], ["--method", "mrl", "--out", os.path.join(
+            whole, "runs", "mass_m12_cd0.01_v0.5_mrl")])
+        for method in ("alg1", "ocfb", "mrl"):
+            for m in ("mass", "push"):
+                png = os.path.join("heatmaps", f"{m}_{method}.png")
+                self.assertTrue(filecmp.cmp(os.path.join(merged, png), os.path.join(whole, png),
+                                            shallow=False), png)
+
+        # A missing slice, a slice given twice, a slice of another grid: named errors.
+        r = run_tool("robustness_map", "merge", slices[0], slices[2], "--out", merged)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("are in no slice", r.stderr)
+        r = run_tool("robustness_map", "merge", *slices, slices[1], "--out", merged)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("is in both", r.stderr)
+        other = os.path.join(self.tmp, "other")
+        self.run_map(other, "--shard", "1/3", "--hops", "11")
+        r = run_tool("robustness_map", "merge", slices[0], other, slices[2], "--out", merged)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("another grid", r.stderr)
+        self.assertIn("hops", r.stderr)
+
+    def test_slurm_array_task_runs_its_slice(self):
+        base = os.path.join(self.tmp, "base")
+        env = dict(os.environ, SLURM_ARRAY_TASK_ID="3", SLURM_ARRAY_TASK_MIN="1",
+                   SLURM_ARRAY_TASK_COUNT="4", SLURM_CPUS_PER_TASK="2", SLURM_SUBMIT_DIR=ROOT,
+                   PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg")
+        r = subprocess.run(["bash", os.path.join(TOOLS, "robustness_map.slurm"), *SMALL,
+                            "--out", base], capture_output=True, text=True, env=env, cwd=self.tmp,
+                           timeout=300)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(base, "shard-2-of-4", "manifest.json")) as f:
+            manifest = json.load(f)
+        self.assertEqual(manifest["shard"], [2, 4])  # task 3 of the array 1..4
+        grid = manifest["grid"]
+        self.assertEqual(manifest["cases"], [c[1] for c in rm.shard_cases(rm.cases(grid), (2, 4))])
+        self.assertEqual(len(manifest["cases"]), 6)
+        self.assertEqual(sorted(os.listdir(os.path.join(base, "shard-2-of-4", "runs"))),
+                         sorted(manifest["cases"]))
+        self.assertEqual(os.listdir(base), ["shard-2-of-4"])
+        # Without the array variables, or with a task outside the array: named errors.
+        for variables, needle in (({}, "SLURM_ARRAY_TASK_ID is not set"),
+                                  ({"SLURM_ARRAY_TASK_ID": "4"}, "SLURM_ARRAY_TASK_COUNT"),
+                                  ({"SLURM_ARRAY_TASK_ID": "x", "SLURM_ARRAY_TASK_COUNT": "4"},
+                                   "not an integer"),
+                                  ({"SLURM_ARRAY_TASK_ID": "4", "SLURM_ARRAY_TASK_COUNT": "4"},
+                                   "is not a slice of 4")):
+            with self.subTest(variables=variables):
+                env = {k: v for k, v in os.environ.items() if not k.startswith("SLURM_")}
+                env.update(variables)
+                r = subprocess.run([PYTHON, os.path.join(TOOLS, "robustness_map"), "slurm-task",
+                                    *SMALL, "--out", base], capture_output=True, text=True,
+                                   env=env, timeout=60)
+                self.assertEqual(r.returncode, 2, r.stderr)
+                self.assertIn(needle, r.stderr)
+
+
+class UsageTest(TempDirTest):
+    def test_bad_usage(self):
+        self.assert_usage_errors("robustness_map", [
+            (["--shard", "3/3", "--hopper", FAKE], ["--shard \"3/3\"", "0 <= I < N"]),
+            (["--shard", "1-3", "--hopper", FAKE], ["--shard \"1-3\"", "I/N"]),
+            (["--maps", "mass,wind", "--hopper", FAKE], ["--maps", "'wind'", "mass,push"]),
+            (["--methods", "alg1,ppo", "--hopper", FAKE], ["--methods", "'ppo'"]),
+            (["--robots", "10", "--hopper", FAKE], ["--robots", "shipped robot"]),
+            (["--phases", "0,1", "--hopper", FAKE], ["--phases", "in [0, 1)"]),
+            (["--push-hop", "100", "--hopper", FAKE], ["--push-hop 100"]),
+            (["--masses", "8,heavy", "--hopper", FAKE], ["--masses"]),
+            (["--preset", "paper", "--hopper", FAKE], ["--preset paper", "no --preset flag"]),
+            (["--hopper", os.path.join(self.tmp, "nope")], ["ddoc-hopper not found"]),
+        ])
+        r = run_tool("robustness_map", "merge", self.tmp, "--out", os.path.join(self.tmp, "m"))
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("not a robustness_map output", r.stderr)
+
+
+@unittest.skipUnless(os.access(HOPPER, os.X_OK), "DDOC_HOPPER (the ddoc-hopper binary) not set")
+class RealRunTest(TempDirTest):
+    def test_one_mass_and_one_push_case(self):
+        out = os.path.join(self.tmp, "map")
+        r = run_tool("robustness_map", "--methods", "ocfb", "--hops", "5", "--masses", "9",
+                     "--drags", "0.01", "--speeds", "0.5", "--robots", "8", "--forces", "15",
+                     "--durations", "0.05", "--phases", "0.25", "--push-hop", "2",
+                     "--hopper", HOPPER, "--out", out, "--jobs", "2")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        [mass] = csv_rows(os.path.join(out, "mass_map.csv"))
+        self.assertEqual((mass["case"], mass["exit"], mass["hops"], mass["survived"],
+                          mass["learner_status"]), ("mass_m9_cd0.01_v0.5_ocfb", "0", "5", "1", "none"))
+        with open(os.path.join(out, "robots", "hopper_m9_cd0.01.xml")) as f:
+            robot = f.read()
+        self.assertIn('mass="9.0"', robot)
+        self.assertIn('name="drag_cd" data="0.01"', robot)
+        run = os.path.join(out, "runs", "mass_m9_cd0.01_v0.5_ocfb")
+        with open(os.path.join(run, "hops.csv")) as f:
+            costs = [float(row["cost"]) for row in csv.DictReader(f)]
+        self.assertEqual(len(costs), 5)
+        self.assertAlmostEqual(float(mass["cost_last10"]), sum(costs) / 5, places=4)
+        [push] = csv_rows(os.path.join(out, "push_map.csv"))
+        self.assertEqual((push["robot_mass"], push["force"], push["phase"], push["push_hop"]),
+                         ("8", "15", "0.25", "2"))
+        prun = os.path.join(out, "runs", push["case"])
+        with open(os.path.join(prun, "hops.csv")) as f:
+            t_start = [float(row["t_start"]) for row in csv.DictReader(f)]
+        want = t_start[2] + 0.25 * (t_start[2] - t_start[1])
+        self.assertAlmostEqual(float(push["push_t"]), want, delta=0.0006)
+        with open(os.path.join(prun, "events.csv")) as f:
+            self.assertIn(",2,push_start,", f.read())
+        self.assertIn(push["push_status"], ("recovered", "not recovered"))
+        with open(os.path.join(out, "summary.md")) as f:
+            self.assertIn("| 9 | 0.01 | 0.5 | 5, ", f.read())
+
+
+if __name__ == "__main__":
+    unittest.main()
