@@ -86,6 +86,8 @@ struct LearnerSettings {
   /// the same nominal and cost) instead of terminating; batch Solve still terminates. Default
   /// false.
   bool restart_on_failure = false;
+  /// alpha after a restart of the line search, in [0, 1]; 0 (default) = alpha_initial.
+  double restart_alpha = 0.0;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
   BackwardPassSettings backward;         ///< (30)
@@ -254,7 +256,7 @@ class Learner {
   bool AcceptNominal(const Trajectory& direction, double cost);
   // (30) on nominal_ with the current mu, raising it on failure.
   bool RunPass();
-  // restart_on_failure: alpha <- alpha_initial around the same nominal.
+  // restart_on_failure: alpha <- restart_alpha (or alpha_initial) around the same nominal.
   void RestartLineSearch(TrialResult* r);
   // The status after a new nominal: converged when the optimality (and step) tests hold.
   void UpdateConvergence();

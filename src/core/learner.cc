@@ -129,6 +129,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   CheckSetting(settings.alpha_min >= 0 && settings.alpha_min < settings.alpha_initial,
                "alpha_min must be in [0, alpha_initial)");
   CheckSetting(settings.epsilon > 0, "epsilon must be > 0");
+  CheckSetting(settings.restart_alpha >= 0 && settings.restart_alpha <= 1,
+               "restart_alpha must be in [0, 1]");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
@@ -192,7 +194,7 @@ double Learner::StartShift(const ConstVectorRef& x0) const {
 }
 
 void Learner::RestartLineSearch(TrialResult* r) {
-  alpha_ = settings_.alpha_initial;
+  alpha_ = settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;
   ++restarts_;
   r->restarted = true;
 }

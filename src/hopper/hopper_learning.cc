@@ -23,6 +23,7 @@ LearnerSettings HopperLearnerSettings() {
   s.alpha_initial = 0.1;
   s.start_correction = false;
   s.restart_on_failure = true;
+  s.restart_alpha = 1e-3;
   return s;
 }
 
@@ -39,7 +40,7 @@ LearnerSettings HopperPaperLearnerSettings() {
 TrialDriverSettings HopperTrialSettings(Preset preset) {
   TrialDriverSettings s;
   s.method = Method::kAlg1;
-  s.warmup_trials = 3;
+  s.warmup_trials = 1;
   s.learner = preset == Preset::kPaper ? HopperPaperLearnerSettings() : HopperLearnerSettings();
   return s;
 }

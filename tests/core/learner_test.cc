@@ -378,6 +378,19 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   EXPECT_EQ(learner.status(), LearnerStatus::kRunning);
   EXPECT_EQ(learner.restarts(), 4);
   EXPECT_DOUBLE_EQ(learner.alpha(), 1.0);
+  // restart_alpha: the restarted line search starts there instead of at alpha_initial.
+  settings.restart_alpha = 0.25;
+  Learner cautious(p.problem, settings);
+  cautious.Initialize(measured);
+  for (int i = 0; i < 4; ++i) {
+    plant.Run(lq.x0, cautious.NextTrial(), &measured);
+    cautious.CompleteTrial(measured);
+  }
+  EXPECT_EQ(cautious.restarts(), 1);
+  EXPECT_DOUBLE_EQ(cautious.alpha(), 0.25);
+  settings.restart_alpha = 2.0;
+  EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
+  settings.restart_alpha = 0.0;
   Learner batch(p.problem, settings);
   FunctionPolicy again = ZeroInputPolicy();
   const SolveResult solved = batch.Solve(plant, plant, lq.x0, again);

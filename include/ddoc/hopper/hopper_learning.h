@@ -19,7 +19,8 @@ namespace ddoc {
 /// (why, with the measurements, in docs/hopper.md "Learner settings" and docs/robustness_map.md):
 /// the paper's (36) with c = 1e-7, gamma = 0.5, plain backtracking and its step test;
 /// alpha_initial = 0.1, growing by 1/gamma after an accepted trial (kGrow); the line search
-/// restarts instead of terminating (restart_on_failure); no start correction;
+/// restarts at alpha = 1e-3 instead of terminating (restart_on_failure, restart_alpha; it grows
+/// by 1/gamma with each accepted trial); no start correction;
 /// regularization_min = 0.01; RK4 pass with PSD switching Hessians, box_aware = false,
 /// time_curvature = false, the periodic value cyclic_value = 0.99 and the terminal condition
 /// through the takeoff event (terminal_event).
@@ -31,9 +32,8 @@ LearnerSettings HopperLearnerSettings();
 /// printed.
 LearnerSettings HopperPaperLearnerSettings();
 
-/// The trial driver on the hopper: Algorithm 1, 3 warm-up hops (hop 0 starts on the model gait's
-/// state, not on the robot's own cycle), learner = HopperLearnerSettings() (kDefault) or
-/// HopperPaperLearnerSettings() (kPaper).
+/// The trial driver on the hopper: Algorithm 1 with one "Initialize" hop of u^0 (as printed),
+/// learner = HopperLearnerSettings() (kDefault) or HopperPaperLearnerSettings() (kPaper).
 TrialDriverSettings HopperTrialSettings(Preset preset = Preset::kDefault);
 
 /// Duration bounds of the hopper's modes (Bounds::duration_min/max), s.
