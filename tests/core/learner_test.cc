@@ -275,19 +275,36 @@ TEST(Learner, IncrementalAcceptanceAndTerminationReplaysTheLastAcceptedLaw) {
 // "nominal inputs + the pass's feedback" (ConvergedPolicy(0)) its gradient and Hessian at dx = 0
 // are the Riccati pass's p_x(0) and P_xx(0) (docs/engine.md). The known answer is the measured
 // cost of that law run from the shifted start.
-TEST(Learner, StartShiftPredictsTheCostOfTheNominalLawFromAnotherStart) {
+// The two-mode LQ problem on a fine plant (dt = 2.5e-4) and the nominal of u = 0 from lq.x0.
+struct FineLq {
   TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlantSettings fine;
-  fine.dt = 2.5e-4;
-  ModelPlant plant(p.problem, fine);
-  FunctionPolicy initial = ZeroInputPolicy();
+  LqProblem p{lq};
+  ModelPlant plant{p.problem, [] {
+                     ModelPlantSettings fine;
+                     fine.dt = 2.5e-4;
+                     return fine;
+                   }()};
+  Trajectory nominal;
+  FineLq() {
+    FunctionPolicy initial = ZeroInputPolicy();
+    plant.Run(lq.x0, initial, &nominal);
+  }
+  static LearnerSettings Settings(bool start_correction) {
+    LearnerSettings s = LqTestSettings();
+    s.max_samples = 20000;
+    s.start_correction = start_correction;
+    return s;
+  }
+};
+
+TEST(Learner, StartShiftPredictsTheCostOfTheNominalLawFromAnotherStart) {
+  FineLq f;
+  const TwoModeLq& lq = f.lq;
+  LqProblem& p = f.p;
+  ModelPlant& plant = f.plant;
   Trajectory measured;
-  plant.Run(lq.x0, initial, &measured);
-  LearnerSettings settings = LqTestSettings();
-  settings.max_samples = 20000;
-  Learner learner(p.problem, settings);
-  learner.Initialize(measured);
+  Learner learner(p.problem, FineLq::Settings(true));
+  learner.Initialize(f.nominal);
   const double cost0 = learner.nominal_cost();
   for (const Eigen::Vector2d dx : {Eigen::Vector2d(0.2, 0), Eigen::Vector2d(0.5, 0.5),
                                    Eigen::Vector2d(0.05, -0.5)}) {
@@ -305,21 +322,14 @@ TEST(Learner, StartShiftPredictsTheCostOfTheNominalLawFromAnotherStart) {
 // raw costs rejects it, the corrected test accepts it; its corrected decrease is the measured
 // cost minus the counterfactual cost of the nominal law from the same start.
 TEST(Learner, AcceptanceComparesTrialsAsIfFromTheSameStart) {
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlantSettings fine;
-  fine.dt = 2.5e-4;
-  ModelPlant plant(p.problem, fine);
-  FunctionPolicy initial = ZeroInputPolicy();
-  Trajectory nominal, measured, counterfactual;
-  plant.Run(lq.x0, initial, &nominal);
-  const Vector worse = lq.x0 + Eigen::Vector2d(2.0, 1.0);
+  FineLq f;
+  LqProblem& p = f.p;
+  ModelPlant& plant = f.plant;
+  Trajectory measured, counterfactual;
+  const Vector worse = f.lq.x0 + Eigen::Vector2d(2.0, 1.0);
   for (const bool correct : {false, true}) {
-    LearnerSettings settings = LqTestSettings();
-    settings.max_samples = 20000;
-    settings.start_correction = correct;
-    Learner learner(p.problem, settings);
-    learner.Initialize(nominal);
+    Learner learner(p.problem, FineLq::Settings(correct));
+    learner.Initialize(f.nominal);
     const double cost0 = learner.nominal_cost();
     plant.Run(worse, learner.ConvergedPolicy(0.0), &counterfactual);
     const double cost_nominal_law = EvaluateCost(p.problem, counterfactual).total;
