@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
-// The Python module `ddoc`: a thin pybind11 layer over the engine's public API (docs/python.md).
+// The extension module `ddoc._ddoc` of the Python package `ddoc` (python/ddoc/): a thin pybind11
+// layer over the engine's public API (docs/python.md).
 // What lives here and not in the engine:
 //   - LinearSystem / QuadraticCost: a matrix-given linear-quadratic switched system that runs
 //     entirely in C++ (the engine has no public LQ class; the tests' ones are not installed);
@@ -612,7 +613,7 @@ void BindHopper(py::module_& mod);  // hopper_binding.cc
 using namespace ddoc;          // NOLINT
 using namespace ddoc::python;  // NOLINT
 
-PYBIND11_MODULE(ddoc, mod) {
+PYBIND11_MODULE(_ddoc, mod) {  // re-exported by the package ddoc (python/ddoc/__init__.py)
   mod.doc() =
       "ddoc: data-driven iterative optimal control of switched systems (Algorithm 1 of Chen, Li "
       "& Braun, RA-L 2023). A thin layer over the C++ engine; see docs/python.md.";
