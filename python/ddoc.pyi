@@ -163,9 +163,30 @@ class ModeTrajectory:
     u: Array  # (m, N)
 
 class Trajectory:
+    """One trial: modes (ModeTrajectory per mode), T (K,) switching instants, x0."""
     modes: List[ModeTrajectory]
     T: Array
     x0: Array
+    def __init__(self, t: Sequence[ArrayLike], x: Sequence[ArrayLike],
+                 u: Sequence[ArrayLike]) -> None:
+        """Per mode k: t[k] (N_k,), x[k] (n_k, N_k), u[k] (m, N_k); T(k) = t[k][-1]."""
+        ...
+
+class Policy:
+    """The law of one trial, given to Plant.run (valid only during that call)."""
+    input_dim: int
+    def begin_trial(self) -> None: ...
+    def planned_duration(self, k: int) -> float: ...
+    def step(self, k: int, t_since_mode_start: float, x: ArrayLike) -> Array: ...
+
+class Plant:
+    """Runs one trial of a policy; subclass it in Python and define run(x0, policy)."""
+    def __init__(self) -> None: ...
+    def run(self, x0: ArrayLike, policy: Policy) -> Trajectory: ...
+
+class ModelPlant(Plant):
+    """The engine's RK4 plant of a System (ddoc::ModelPlant)."""
+    def __init__(self, system: System, bounds: Bounds, dt: float = 1e-3) -> None: ...
 
 class SolveResult:
     status: str  # 'converged', 'line_search_failed' or 'max_trials'
@@ -184,7 +205,7 @@ class Learner:
     def __init__(self, problem: Problem, settings: LearnerSettings = ...) -> None: ...
     def solve(self, x0: ArrayLike, durations: ArrayLike,
               u0: Union[None, ArrayLike, Callable[[int, float, Array], ArrayLike]] = None,
-              plant: Optional[System] = None, method: str = "alg1", dt: float = 1e-3,
+              plant: Union[None, System, Plant] = None, method: str = "alg1", dt: float = 1e-3,
               progress: Optional[Callable[[Dict[str, Any]], None]] = None) -> SolveResult: ...
     @property
     def nominal(self) -> Trajectory: ...
