@@ -3,8 +3,8 @@
 // ddoc.run_hopper: a ddoc-hopper scenario run from Python (built when the MuJoCo application is):
 // LoadRun + RunStepper, the steps of ddoc-hopper's loop without its files; the per-hop table
 // (the columns of hops.csv) and the per-step trajectory (the columns of trajectory.csv) as NumPy
-// arrays, a progress callback per hop, PNG frames through ddoc::FrameRecorder when the build
-// renders.
+// arrays, a progress callback per hop, PNG frames through app::RunFrames (ddoc::FrameRecorder)
+// when the build renders.
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -19,9 +19,6 @@
 #include <vector>
 
 #include "hopper_run.h"
-#ifdef DDOC_HAVE_RENDER
-#include "ddoc/render/frame_recorder.h"
-#endif
 
 namespace py = pybind11;
 
@@ -141,64 +138,6 @@ app::LoadedRun Load(const std::string& scenario, const app::RunOverrides& overri
   }
 }
 
-struct RenderOptions {
-  std::string dir;
-  int width = 640, height = 480;
-  double fps = 60;
-};
-
-// PNG frames of the run (none when dir is empty), as ddoc-hopper --render writes them.
-class Frames {
- public:
-  Frames(const RenderOptions& o, const mjModel* m, const std::string& method) {
-    if (o.dir.empty()) return;
-#ifdef DDOC_HAVE_RENDER
-    RenderSettings render;
-    render.dir = o.dir;
-    render.width = o.width;
-    render.height = o.height;
-    render.fps = o.fps;
-    std::string error;
-    if (!render.Validate(&error)) throw py::value_error(error);
-    recorder_ = FrameRecorder::Create(m, render, &error);
-    if (!recorder_) throw py::value_error(error);
-    overlay_.method = method;
-#else
-    (void)m;
-    (void)method;
-    throw py::value_error("render_dir: this build has no OSMesa rendering");
-#endif
-  }
-  // The frames due now; throws std::runtime_error naming the file.
-  void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed) {
-#ifdef DDOC_HAVE_RENDER
-    if (!recorder_) return;
-    overlay_.hop = hop;
-    overlay_.last_cost = cost;
-    overlay_.forward_speed = speed;
-    recorder_->MaybeCapture(m, d, overlay_);
-#else
-    (void)m, (void)d, (void)hop, (void)cost, (void)speed;
-#endif
-  }
-  long Finish() {
-#ifdef DDOC_HAVE_RENDER
-    if (!recorder_) return 0;
-    std::string error;
-    if (!recorder_->Finish(&error)) throw std::runtime_error("render: " + error);
-    return static_cast<long>(recorder_->frame_count());
-#else
-    return 0;
-#endif
-  }
-
- private:
-#ifdef DDOC_HAVE_RENDER
-  std::unique_ptr<FrameRecorder> recorder_;
-  Overlay overlay_;
-#endif
-};
-
 py::dict HopDict(const HopReport& h) {
   py::dict d;
   for (const HopColumn& c : kHopColumns) {
@@ -235,7 +174,14 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   }
   app::LoadedRun run = Load(scenario, overrides);
   const std::string method_name = app::MethodName(run.scenario.method);
-  Frames frames(RenderOptions{render_dir, width, height, fps}, run.model.get(), method_name);
+  std::unique_ptr<app::RunFrames> frames;
+  try {
+    frames = std::make_unique<app::RunFrames>(
+        app::RunFrames::Settings{render_dir, width, height, fps}, run.model.get(), method_name,
+        "render_dir");
+  } catch (const app::RunError& e) {
+    throw py::value_error(e.what());
+  }
 
   std::vector<std::vector<double>> hop_table(kNumHopColumns), trajectory(kNumTrajectoryColumns);
   std::string fall_reason, error;
@@ -251,7 +197,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
              (s.seconds > 0 && run.data->time >= s.seconds);
     };
     auto capture = [&] {
-      frames.Capture(run.model.get(), run.data.get(), c.hop(), last_cost, last_speed);
+      frames->Capture(run.model.get(), run.data.get(), c.hop(), last_cost, last_speed);
     };
     capture();  // frame 0 shows the start state
     long step = 0;
@@ -297,7 +243,9 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
       }
     }
   }
-  const long frame_count = frames.Finish();
+  std::string render_error;
+  if (!frames->Finish(&render_error)) throw std::runtime_error("render: " + render_error);
+  const long frame_count = frames->frame_count();
   if (!error.empty()) throw std::runtime_error("run_hopper: " + error);
   py::dict out;
   for (size_t k = 0; k < kNumHopColumns; ++k) {
@@ -330,7 +278,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
 
 void BindHopper(py::module_& mod) {
 #ifdef DDOC_HAVE_RENDER
-  mod.attr("HAVE_RENDER") = true;
+  mod.attr("HAVE_RENDER") = true;  // the module links ddoc_render, as ddoc_app_run does
 #else
   mod.attr("HAVE_RENDER") = false;
 #endif
