@@ -7,6 +7,8 @@
 //     entirely in C++ (the engine has no public LQ class; the tests' ones are not installed);
 //   - CallbackSystem / CallbackCost: SwitchedSystem / SwitchedCost whose parts are Python
 //     callables, missing derivatives by ddoc::CentralDifferenceJacobian;
+//   - Plant: a pybind11 trampoline (PyPlant) so that a Plant can be written in Python; its run
+//     gets the trial's Policy as a view valid only during the call;
 //   - Learner.solve: Learner::Solve's trial loop driven through Initialize / NextTrial /
 //     CompleteTrial, so that the GIL is released during each trial and Ctrl-C and the progress
 //     callback are handled between trials.
