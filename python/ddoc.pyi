@@ -1,4 +1,4 @@
-"""Type stub of the ddoc Python module (python/ddoc_module.cc). See docs/python.md."""
+"""Type stub of the ddoc Python package (python/ddoc_module.cc, python/ddoc/). See docs/python.md."""
 from enum import Enum
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
@@ -9,8 +9,9 @@ ArrayLike = npt.ArrayLike
 Array = npt.NDArray[np.float64]
 
 class SolveInterrupted(KeyboardInterrupt):
-    """Ctrl-C during Learner.solve; .result is the SolveResult of the trials done so far."""
-    result: Optional[SolveResult]
+    """Ctrl-C during Learner.solve (.result: the SolveResult of the trials done so far),
+    run_hopper (the partial result dict) or robustness_map (the finished cases)."""
+    result: Any
 
 class Bounds:
     """Input bounds (6), duration bounds (7) and a box on the final time."""
@@ -162,9 +163,30 @@ class ModeTrajectory:
     u: Array  # (m, N)
 
 class Trajectory:
+    """One trial: modes (ModeTrajectory per mode), T (K,) switching instants, x0."""
     modes: List[ModeTrajectory]
     T: Array
     x0: Array
+    def __init__(self, t: Sequence[ArrayLike], x: Sequence[ArrayLike],
+                 u: Sequence[ArrayLike]) -> None:
+        """Per mode k: t[k] (N_k,), x[k] (n_k, N_k), u[k] (m, N_k); T(k) = t[k][-1]."""
+        ...
+
+class Policy:
+    """The law of one trial, given to Plant.run (valid only during that call)."""
+    input_dim: int
+    def begin_trial(self) -> None: ...
+    def planned_duration(self, k: int) -> float: ...
+    def step(self, k: int, t_since_mode_start: float, x: ArrayLike) -> Array: ...
+
+class Plant:
+    """Runs one trial of a policy; subclass it in Python and define run(x0, policy)."""
+    def __init__(self) -> None: ...
+    def run(self, x0: ArrayLike, policy: Policy) -> Trajectory: ...
+
+class ModelPlant(Plant):
+    """The engine's RK4 plant of a System (ddoc::ModelPlant)."""
+    def __init__(self, system: System, bounds: Bounds, dt: float = 1e-3) -> None: ...
 
 class SolveResult:
     status: str  # 'converged', 'line_search_failed' or 'max_trials'
@@ -183,7 +205,7 @@ class Learner:
     def __init__(self, problem: Problem, settings: LearnerSettings = ...) -> None: ...
     def solve(self, x0: ArrayLike, durations: ArrayLike,
               u0: Union[None, ArrayLike, Callable[[int, float, Array], ArrayLike]] = None,
-              plant: Optional[System] = None, method: str = "alg1", dt: float = 1e-3,
+              plant: Union[None, System, Plant] = None, method: str = "alg1", dt: float = 1e-3,
               progress: Optional[Callable[[Dict[str, Any]], None]] = None) -> SolveResult: ...
     @property
     def nominal(self) -> Trajectory: ...
@@ -197,9 +219,41 @@ class Learner:
     def settings(self) -> LearnerSettings: ...
 
 
+HAVE_RENDER: bool
+"""run_hopper can write PNG frames (the build has OSMesa rendering); with run_hopper only."""
+
+Push = Union[str, Tuple[float, float, float], Tuple[int, float, float, float]]
+
 def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
                seconds: Optional[float] = None, robot: str = "", model_mjcf: str = "",
-               pushes: Sequence[str] = ..., no_pushes: bool = False) -> Dict[str, Any]:
-    """Runs a ddoc-hopper scenario (built with the MuJoCo application only); the columns of
-    hops.csv as NumPy arrays plus method, fell, fall_reason, sim_time."""
+               pushes: Sequence[Push] = ..., no_pushes: bool = False, preset: str = "",
+               offline_latency: Optional[float] = None, log_every: int = 1,
+               progress: Optional[Callable[[Dict[str, Any]], None]] = None,
+               render_dir: str = "", width: int = 640, height: int = 480,
+               fps: float = 60.0) -> Dict[str, Any]:
+    """Runs a ddoc-hopper scenario (built with the MuJoCo application only) with the command
+    line's overrides (method, hops, seconds, robot, model_mjcf, pushes as (time, force, duration),
+    (hop, phase, force, duration) or the --push strings, no_pushes, preset "default" | "paper",
+    offline_latency, log_every); progress(row) after every hop; PNG frames into render_dir when
+    HAVE_RENDER. Returns the columns of hops.csv as NumPy arrays, 'trajectory' (the columns of
+    trajectory.csv), method, fell, fall_reason, sim_time, frames. Ctrl-C raises SolveInterrupted
+    with the partial result."""
+    ...
+
+def to_dataframe(table: Dict[str, Any]) -> Any:
+    """The dict of equal-length arrays `table` as a pandas DataFrame (other plain values in
+    .attrs); ImportError when pandas is not installed."""
+    ...
+
+def robustness_map(out: str, maps: Union[str, Sequence[str]] = ("mass", "push"),
+                   methods: Union[str, Sequence[str]] = ("alg1", "ocfb", "mrl"),
+                   shard: Union[None, str, Tuple[int, int]] = None, jobs: Optional[int] = None,
+                   preset: str = "default", hops: Optional[int] = None,
+                   tool: Optional[str] = None, hopper: Optional[str] = None,
+                   as_frame: bool = False, verbose: bool = False,
+                   **grid: Any) -> Dict[str, Any]:
+    """Runs tools/robustness_map into `out` (grid options as keywords: masses, drags, speeds,
+    robots, forces, durations, phases, push_hop, push_speed, tolerance) and returns
+    {map: the columns of OUT/<map>_map.csv as NumPy arrays} (DataFrames with as_frame=True).
+    Ctrl-C stops the tool and raises SolveInterrupted with the finished cases in .result."""
     ...

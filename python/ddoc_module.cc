@@ -1,11 +1,14 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
-// The Python module `ddoc`: a thin pybind11 layer over the engine's public API (docs/python.md).
+// The extension module `ddoc._ddoc` of the Python package `ddoc` (python/ddoc/): a thin pybind11
+// layer over the engine's public API (docs/python.md).
 // What lives here and not in the engine:
 //   - LinearSystem / QuadraticCost: a matrix-given linear-quadratic switched system that runs
 //     entirely in C++ (the engine has no public LQ class; the tests' ones are not installed);
 //   - CallbackSystem / CallbackCost: SwitchedSystem / SwitchedCost whose parts are Python
 //     callables, missing derivatives by ddoc::CentralDifferenceJacobian;
+//   - Plant: a pybind11 trampoline (PyPlant) so that a Plant can be written in Python; its run
+//     gets the trial's Policy as a view valid only during the call;
 //   - Learner.solve: Learner::Solve's trial loop driven through Initialize / NextTrial /
 //     CompleteTrial, so that the GIL is released during each trial and Ctrl-C and the progress
 //     callback are handled between trials.
@@ -468,6 +471,71 @@ LearnerSettings PresetByName(const std::string& name) {
   throw InvalidArgument("preset: unknown preset '" + name + "', expected 'default' or 'paper'");
 }
 
+// ------------------------------------------------------------------------------ plants
+
+/// The policy of one trial, as Plant.run sees it: valid only during that run (afterwards its
+/// methods raise), so that Python cannot keep a dangling C++ policy.
+struct PolicyView {
+  Policy* policy = nullptr;
+  int input_dim = 0;
+  Policy& Get() const {
+    if (policy == nullptr) throw InvalidArgument("policy: used outside the Plant.run it was given to");
+    return *policy;
+  }
+};
+
+/// A Plant written in Python: Plant.run(x0, policy) returns the measured ddoc.Trajectory.
+class PyPlant : public Plant {
+ public:
+  void Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) override {
+    py::gil_scoped_acquire gil;
+    py::function run = py::get_override(static_cast<const Plant*>(this), "run");
+    if (!run) throw InvalidArgument("Plant: a subclass must define run(x0, policy)");
+    auto view = std::make_shared<PolicyView>();
+    view->policy = &policy;
+    view->input_dim = input_dim;
+    struct Invalidate {
+      PolicyView* v;
+      ~Invalidate() { v->policy = nullptr; }
+    } invalidate{view.get()};
+    py::object result = run(ToArray(x0), view);
+    if (!py::isinstance<Trajectory>(result)) {
+      throw InvalidArgument("Plant.run returned " +
+                            std::string(py::str(py::type::handle_of(result).attr("__name__"))) +
+                            ", expected a ddoc.Trajectory");
+    }
+    *out = result.cast<Trajectory>();
+  }
+  int input_dim = 0;  ///< m of the problem it runs (set by Learner.solve)
+};
+
+/// Trajectory(t, x, u): per mode k the sample times t[k] (N_k,), states x[k] (n_k, N_k) and
+/// inputs u[k] (m, N_k); T(k) = t[k][-1], x0 = x[0][:, 0]; Trajectory::Validate checks the rest.
+Trajectory MakeTrajectory(const py::sequence& t, const py::sequence& x, const py::sequence& u) {
+  if (x.size() != t.size() || u.size() != t.size()) {
+    throw InvalidArgument("Trajectory: t, x and u have " + std::to_string(t.size()) + ", " +
+                          std::to_string(x.size()) + " and " + std::to_string(u.size()) +
+                          " modes, expected the same number");
+  }
+  Trajectory out;
+  const size_t K = t.size();
+  out.T.resize(static_cast<Eigen::Index>(K));
+  for (size_t k = 0; k < K; ++k) {
+    const std::string at = "[" + std::to_string(k) + "]";
+    ModeTrajectory mode;
+    mode.t = AsVector(t[k], "t" + at);
+    const Eigen::Index N = mode.t.size();
+    mode.x = AsMatrix(x[k], "x" + at, -1, N);
+    mode.u = AsMatrix(u[k], "u" + at, -1, N);
+    if (N == 0) throw InvalidArgument("t" + at + ": no samples");
+    out.T(static_cast<Eigen::Index>(k)) = mode.t(N - 1);
+    out.modes.push_back(std::move(mode));
+  }
+  if (K > 0) out.x0 = out.modes[0].x.col(0);
+  out.Validate();
+  return out;
+}
+
 /// SolveResult plus what the binding adds: whether Ctrl-C stopped the solve.
 struct PySolveResult {
   SolveResult result;
@@ -481,12 +549,23 @@ class PyLearner {
       : problem_(&problem), learner_(std::make_unique<Learner>(problem, settings)) {}
 
   PySolveResult Solve(const py::object& x0_in, const py::object& durations_in,
-                      const py::object& u0, const SwitchedSystem* plant_system,
+                      const py::object& u0, const py::object& plant_in,
                       const std::string& method, double dt, const py::object& progress) {
+    // plant: None, a System (run by a ModelPlant) or a Plant (e.g. written in Python).
+    const SwitchedSystem* plant_system = nullptr;
+    Plant* user_plant = nullptr;
+    if (py::isinstance<Plant>(plant_in)) {
+      user_plant = plant_in.cast<Plant*>();
+    } else if (py::isinstance<SwitchedSystem>(plant_in)) {
+      plant_system = plant_in.cast<const SwitchedSystem*>();
+    } else if (!plant_in.is_none()) {
+      throw InvalidArgument("plant: expected None, a System or a Plant, got " +
+                            std::string(py::str(py::type::handle_of(plant_in).attr("__name__"))));
+    }
     if (method != "alg1" && method != "mrl") {
       throw InvalidArgument("method: unknown method '" + method + "', expected 'alg1' or 'mrl'");
     }
-    if (method == "mrl" && plant_system == nullptr) {
+    if (method == "mrl" && plant_system == nullptr && user_plant == nullptr) {
       throw InvalidArgument("method: 'mrl' needs a plant (a system other than the model)");
     }
     const Problem& problem = *problem_;
@@ -519,8 +598,9 @@ class PyLearner {
     if (plant_system != nullptr) {
       real = std::make_unique<ModelPlant>(*plant_system, problem.bounds, plant_settings);
     }
+    if (auto* py_plant = dynamic_cast<PyPlant*>(user_plant)) py_plant->input_dim = m;
     // Algorithm 1 on the plant (or the model); mRL: directions from the model.
-    Plant& cost_plant = real ? static_cast<Plant&>(*real) : model;
+    Plant& cost_plant = user_plant ? *user_plant : real ? static_cast<Plant&>(*real) : model;
     Plant& direction_plant = method == "mrl" ? static_cast<Plant&>(model) : cost_plant;
     const bool same = &direction_plant == &cost_plant;
     Learner& learner = *learner_;
@@ -612,7 +692,7 @@ void BindHopper(py::module_& mod);  // hopper_binding.cc
 using namespace ddoc;          // NOLINT
 using namespace ddoc::python;  // NOLINT
 
-PYBIND11_MODULE(ddoc, mod) {
+PYBIND11_MODULE(_ddoc, mod) {  // re-exported by the package ddoc (python/ddoc/__init__.py)
   mod.doc() =
       "ddoc: data-driven iterative optimal control of switched systems (Algorithm 1 of Chen, Li "
       "& Braun, RA-L 2023). A thin layer over the C++ engine; see docs/python.md.";
@@ -850,9 +930,56 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readonly("x", &ModeTrajectory::x)
       .def_readonly("u", &ModeTrajectory::u);
   py::class_<Trajectory>(mod, "Trajectory", "One trial: modes (list of ModeTrajectory), T (K,), x0.")
+      .def(py::init(&MakeTrajectory), py::arg("t"), py::arg("x"), py::arg("u"),
+           "A measured trial, per mode k: t[k] (N_k,) sample times from the trial's start, x[k] "
+           "(n_k, N_k) states, u[k] (m, N_k) applied inputs; T(k) = t[k][-1], x0 = x[0][:, 0]. "
+           "What Plant.run returns. Checked by Trajectory::Validate (ValueError).")
       .def_readonly("modes", &Trajectory::modes)
       .def_readonly("T", &Trajectory::T)
       .def_readonly("x0", &Trajectory::x0);
+
+  py::class_<PolicyView, std::shared_ptr<PolicyView>>(
+      mod, "Policy", "The law of one trial, given to Plant.run (valid only during that call).")
+      .def("begin_trial", [](const PolicyView& p) { p.Get().BeginTrial(); },
+           "Call once at the start of the trial (resets per-trial state).")
+      .def("planned_duration", [](const PolicyView& p, int k) { return p.Get().PlannedDuration(k); },
+           py::arg("k"), "The planned duration D_k of mode k (s).")
+      .def(
+          "step",
+          [](const PolicyView& p, int k, double t_since_mode_start, const py::object& x) {
+            Policy& policy = p.Get();
+            const Vector xv = AsVector(x, "x");
+            Vector u = Vector::Zero(p.input_dim);
+            policy.Step(k, t_since_mode_start, xv, u);
+            return ToArray(u);
+          },
+          py::arg("k"), py::arg("t_since_mode_start"), py::arg("x"),
+          "u (m,) = the policy at mode k, time since the mode's start, measured state x (n_k,).")
+      .def_readonly("input_dim", &PolicyView::input_dim);
+  py::class_<Plant, PyPlant>(mod, "Plant",
+                             "Runs one trial of a policy (Algorithm 1's 'system'). Subclass it in "
+                             "Python and define run(x0, policy) -> Trajectory: call "
+                             "policy.begin_trial(), then u = policy.step(k, t, x) each control "
+                             "step, end mode k by policy.planned_duration(k) or a surface, and "
+                             "return what was measured. Pass it as Learner.solve(plant=...).")
+      .def(py::init<>())
+      .def(
+          "run",
+          [](Plant& plant, const py::object& x0, const PolicyView& policy) {
+            Trajectory out;
+            plant.Run(AsVector(x0, "x0"), policy.Get(), &out);
+            return out;
+          },
+          py::arg("x0"), py::arg("policy"), "Runs one trial from x0 with policy; the Trajectory.");
+  py::class_<ModelPlant, Plant>(mod, "ModelPlant",
+                                "The engine's plant: RK4 of a System at step dt with "
+                                "zero-order-hold inputs and event detection (ddoc::ModelPlant).")
+      .def(py::init([](const SwitchedSystem& system, const Bounds& bounds, double dt) {
+             ModelPlantSettings settings;
+             settings.dt = dt;
+             return std::make_unique<ModelPlant>(system, bounds, settings);
+           }),
+           py::arg("system"), py::arg("bounds"), py::arg("dt") = 1e-3, py::keep_alive<1, 2>());
 
   py::class_<PySolveResult>(mod, "SolveResult", "Result of Learner.solve (NumPy arrays).")
       .def_property_readonly("status", [](const PySolveResult& r) { return LearnerStatusName(r.result.status); },
@@ -882,19 +1009,20 @@ class SolveInterrupted(KeyboardInterrupt):
       .def(
           "solve",
           [](PyLearner& self, const py::object& x0, const py::object& durations,
-             const py::object& u0, const SwitchedSystem* plant, const std::string& method,
+             const py::object& u0, const py::object& plant, const std::string& method,
              double dt, const py::object& progress) {
             return self.Solve(x0, durations, u0, plant, method, dt, progress);
           },
           py::arg("x0"), py::arg("durations"), py::arg("u0") = py::none(),
-          py::arg("plant") = nullptr, py::arg("method") = "alg1", py::arg("dt") = 1e-3,
+          py::arg("plant") = py::none(), py::arg("method") = "alg1", py::arg("dt") = 1e-3,
           py::arg("progress") = py::none(),
           R"(Batch Algorithm 1 from x0 with the initial law u^0, T^0.
 
 x0: initial state (n_0,). durations: planned mode durations of T^0 (K,).
 u0: None (zeros), a constant input (m,), or a callable u0(k, tau, x) -> (m,), tau the
-normalized time k + t/D_k. plant: None (the model is the plant) or another System run as the
-real plant (model error). method: 'alg1' (directions and costs from the plant) or 'mrl'
+normalized time k + t/D_k. plant: None (the model is the plant), another System run as the
+real plant by a ModelPlant (model error), or a Plant (a ddoc.Plant subclass written in Python, or
+a ddoc.ModelPlant). method: 'alg1' (directions and costs from the plant) or 'mrl'
 (directions from the model, costs from the plant). dt: RK4 step of the ModelPlant(s).
 progress: optional callable(dict) after each trial. The GIL is released during each trial;
 Ctrl-C raises ddoc.SolveInterrupted (a KeyboardInterrupt) whose .result is the partial result.)")

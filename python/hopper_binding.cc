@@ -1,12 +1,19 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
 // ddoc.run_hopper: a ddoc-hopper scenario run from Python (built when the MuJoCo application is):
-// LoadRun + RunStepper, the steps of ddoc-hopper's loop without its files, the per-hop table
-// (the columns of hops.csv) as NumPy arrays.
+// LoadRun + RunStepper, the steps of ddoc-hopper's loop without its files; the per-hop table
+// (the columns of hops.csv) and the per-step trajectory (the columns of trajectory.csv) as NumPy
+// arrays, a progress callback per hop, PNG frames through app::RunFrames (ddoc::FrameRecorder)
+// when the build renders.
+#include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,36 +27,106 @@ namespace python {
 
 namespace {
 
-struct HopTable {
-  std::vector<int> hop, accepted;
-  std::vector<double> t_start, t_end, cost, I1, I2, I3, I4, T1, T2, step_length, speed, apex,
-      alpha, du2, dt2;
-  void Add(const plugin::HopReport& h) {
-    hop.push_back(h.hop);
-    t_start.push_back(h.t_start);
-    t_end.push_back(h.t_end);
-    cost.push_back(h.cost);
-    I1.push_back(h.terms.i1);
-    I2.push_back(h.terms.i2);
-    I3.push_back(h.terms.i3);
-    I4.push_back(h.terms.i4);
-    T1.push_back(h.t1);
-    T2.push_back(h.t2);
-    step_length.push_back(h.step_length);
-    speed.push_back(h.speed);
-    apex.push_back(h.apex);
-    alpha.push_back(h.alpha);
-    accepted.push_back(h.accepted ? 1 : 0);
-    du2.push_back(h.du2);
-    dt2.push_back(h.dt2);
-  }
-};
+using plugin::HopReport;
 
-template <class T>
-py::array_t<T> Array(const std::vector<T>& v) {
-  py::array_t<T> a(static_cast<py::ssize_t>(v.size()));
+// The columns of hops.csv (src/app/run_log.cc, RunLog::WriteHop) but `method`, which is one value.
+struct HopColumn {
+  const char* name;
+  bool integer;
+  double (*get)(const HopReport&);
+};
+const HopColumn kHopColumns[] = {
+    {"hop", true, [](const HopReport& h) { return double(h.hop); }},
+    {"t_start", false, [](const HopReport& h) { return h.t_start; }},
+    {"t_end", false, [](const HopReport& h) { return h.t_end; }},
+    {"cost", false, [](const HopReport& h) { return h.cost; }},
+    {"I1", false, [](const HopReport& h) { return h.terms.i1; }},
+    {"I2", false, [](const HopReport& h) { return h.terms.i2; }},
+    {"I3", false, [](const HopReport& h) { return h.terms.i3; }},
+    {"I4", false, [](const HopReport& h) { return h.terms.i4; }},
+    {"T1", false, [](const HopReport& h) { return h.t1; }},
+    {"T2", false, [](const HopReport& h) { return h.t2; }},
+    {"step_length", false, [](const HopReport& h) { return h.step_length; }},
+    {"speed", false, [](const HopReport& h) { return h.speed; }},
+    {"apex", false, [](const HopReport& h) { return h.apex; }},
+    {"alpha", false, [](const HopReport& h) { return h.alpha; }},
+    {"accepted", true, [](const HopReport& h) { return h.accepted ? 1.0 : 0.0; }},
+    {"du2", false, [](const HopReport& h) { return h.du2; }},
+    {"dT2", false, [](const HopReport& h) { return h.dt2; }},
+    {"start_shift", false, [](const HopReport& h) { return h.start_shift; }},
+    {"restarted", true, [](const HopReport& h) { return h.restarted ? 1.0 : 0.0; }},
+};
+constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
+
+// The columns of trajectory.csv (src/app/run_log.cc): t, hop, phase, the 14 flight coordinates
+// and rates, the 4 applied inputs, the push force.
+const char* const kTrajectoryColumns[] = {
+    "t",  "hop",    "phase",  "x",    "y",    "theta",  "phi",    "r",    "k_hip", "k_leg", "xd",
+    "yd", "thetad", "phid",   "rd",   "kd_hip", "kd_leg", "tau0", "F0",   "k0_hip", "k0_leg",
+    "push"};
+constexpr size_t kNumTrajectoryColumns = sizeof(kTrajectoryColumns) / sizeof(kTrajectoryColumns[0]);
+
+py::array_t<double> DoubleArray(const std::vector<double>& v) {
+  py::array_t<double> a(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), a.mutable_data());
   return a;
+}
+
+py::array_t<long> IntArray(const std::vector<double>& v) {
+  py::array_t<long> a(static_cast<py::ssize_t>(v.size()));
+  long* out = a.mutable_data();
+  for (size_t i = 0; i < v.size(); ++i) out[i] = static_cast<long>(v[i]);
+  return a;
+}
+
+// One push of `pushes` as ddoc-hopper's --push text: a string as is, (time, force, duration) or
+// (hop, phase, force, duration) printed exactly (repr round-trips a double), then parsed by the
+// app's ParsePush/ParseHopPush so that the checks are the command line's.
+std::string PushText(const py::handle& item, size_t index) {
+  const std::string name = "pushes[" + std::to_string(index) + "]";
+  std::string text;
+  if (py::isinstance<py::str>(item)) {
+    text = item.cast<std::string>();
+  } else if (py::isinstance<py::sequence>(item)) {
+    const py::sequence seq = item.cast<py::sequence>();
+    const size_t n = seq.size();
+    if (n != 3 && n != 4) {
+      throw py::value_error(name + ": expected (time, force, duration) or (hop, phase, force, "
+                            "duration), got a sequence of length " + std::to_string(n));
+    }
+    std::vector<double> v;
+    for (size_t i = 0; i < n; ++i) {
+      try {
+        v.push_back(py::cast<double>(seq[i]));
+      } catch (const py::cast_error&) {
+        throw py::value_error(name + "[" + std::to_string(i) + "]: expected a number, got " +
+                              std::string(py::str(py::repr(seq[i]))));
+      }
+    }
+    // Python's repr of a float: the shortest text that reads back as the same double.
+    auto number = [](double x) { return std::string(py::repr(py::float_(x))); };
+    if (n == 3) {
+      text = number(v[0]) + "," + number(v[1]) + "," + number(v[2]);
+    } else {
+      const bool whole = v[0] == std::floor(v[0]) && std::abs(v[0]) < 1e15;
+      text = (whole ? std::to_string(static_cast<long long>(v[0])) : number(v[0])) + "@" +
+             number(v[1]) + "," + number(v[2]) + "," + number(v[3]);
+    }
+  } else {
+    throw py::value_error(name + ": expected a string 'TIME,FORCE,DURATION' or "
+                          "'HOP@PHASE,FORCE,DURATION', or a tuple of 3 or 4 numbers, got " +
+                          std::string(py::str(py::type::handle_of(item).attr("__name__"))));
+  }
+  try {
+    if (text.find('@') != std::string::npos) {
+      app::ParseHopPush(text);
+    } else {
+      app::ParsePush(text);
+    }
+  } catch (const std::exception& e) {
+    throw py::value_error(name + ": " + e.what());
+  }
+  return text;
 }
 
 app::LoadedRun Load(const std::string& scenario, const app::RunOverrides& overrides) {
@@ -61,44 +138,102 @@ app::LoadedRun Load(const std::string& scenario, const app::RunOverrides& overri
   }
 }
 
+py::dict HopDict(const HopReport& h) {
+  py::dict d;
+  for (const HopColumn& c : kHopColumns) {
+    if (c.integer) {
+      d[c.name] = static_cast<long>(c.get(h));
+    } else {
+      d[c.name] = c.get(h);
+    }
+  }
+  return d;
+}
+
 py::dict RunHopper(const std::string& scenario, const std::string& method,
                    std::optional<int> hops, std::optional<double> seconds,
                    const std::string& robot, const std::string& model_mjcf,
-                   const std::vector<std::string>& pushes, bool no_pushes) {
+                   const py::iterable& pushes, bool no_pushes, const std::string& preset,
+                   std::optional<double> offline_latency, int log_every,
+                   const py::object& progress, const std::string& render_dir, int width,
+                   int height, double fps) {
   app::RunOverrides overrides;
   overrides.method = method;
   overrides.hops = hops;
   overrides.seconds = seconds;
   overrides.robot = robot;
   overrides.model_mjcf = model_mjcf;
-  overrides.pushes = pushes;
+  size_t index = 0;
+  for (const py::handle item : pushes) overrides.pushes.push_back(PushText(item, index++));
   overrides.no_pushes = no_pushes;
-  HopTable table;
+  overrides.preset = preset;
+  overrides.offline_latency = offline_latency;
+  if (log_every < 0) throw py::value_error("log_every must be >= 0, got " + std::to_string(log_every));
+  if (!progress.is_none() && !PyCallable_Check(progress.ptr())) {
+    throw py::value_error("progress: expected a callable or None");
+  }
+  app::LoadedRun run = Load(scenario, overrides);
+  const std::string method_name = app::MethodName(run.scenario.method);
+  std::unique_ptr<app::RunFrames> frames;
+  try {
+    frames = std::make_unique<app::RunFrames>(
+        app::RunFrames::Settings{render_dir, width, height, fps}, run.model.get(), method_name,
+        "render_dir");
+  } catch (const app::RunError& e) {
+    throw py::value_error(e.what());
+  }
+
+  std::vector<std::vector<double>> hop_table(kNumHopColumns), trajectory(kNumTrajectoryColumns);
   std::string fall_reason, error;
   bool fell = false, interrupted = false;
-  double sim_time = 0;
-  std::string method_name;
-  app::LoadedRun run = Load(scenario, overrides);
+  double last_cost = std::nan(""), last_speed = std::nan("");
   {
     py::gil_scoped_release release;
-    method_name = app::MethodName(run.scenario.method);
     app::RunStepper stepper(&run);
     const app::Scenario& s = run.scenario;
+    const plugin::HopperController& c = *run.controller;
+    auto done = [&] {
+      return (s.hops > 0 && static_cast<int>(hop_table[0].size()) >= s.hops) ||
+             (s.seconds > 0 && run.data->time >= s.seconds);
+    };
+    auto capture = [&] {
+      frames->Capture(run.model.get(), run.data.get(), c.hop(), last_cost, last_speed);
+    };
+    capture();  // frame 0 shows the start state
     long step = 0;
-    while (!((s.hops > 0 && static_cast<int>(table.hop.size()) >= s.hops) ||
-             (s.seconds > 0 && run.data->time >= s.seconds))) {
+    while (!done()) {
       const app::StepOutcome outcome = stepper.Step();
+      ++step;
       if (outcome.kind == app::StepOutcome::Kind::kFailed) {
         error = outcome.reason;
         break;
       }
-      for (const plugin::HopReport& h : run.controller->TakeReports()) table.Add(h);
+      if (log_every > 0 && step % log_every == 0) {
+        const Eigen::Matrix<double, 14, 1>& x = stepper.state();
+        trajectory[0].push_back(run.data->time);
+        trajectory[1].push_back(c.hop());
+        trajectory[2].push_back(c.mode());
+        for (int i = 0; i < 14; ++i) trajectory[3 + i].push_back(x(i));
+        for (int i = 0; i < 4; ++i) trajectory[17 + i].push_back(c.last_input()[i]);
+        trajectory[21].push_back(stepper.push());
+      }
+      const std::vector<HopReport> reports = run.controller->TakeReports();
+      for (const HopReport& h : reports) {
+        for (size_t k = 0; k < kNumHopColumns; ++k) hop_table[k].push_back(kHopColumns[k].get(h));
+        last_cost = h.cost;
+        last_speed = h.speed;
+      }
+      if (!reports.empty() && !progress.is_none()) {
+        py::gil_scoped_acquire gil;
+        for (const HopReport& h : reports) progress(HopDict(h));  // raises: propagates
+      }
+      capture();
       if (outcome.kind == app::StepOutcome::Kind::kFell) {
         fell = true;
         fall_reason = outcome.reason;
         break;
       }
-      if (++step % 2000 == 0) {
+      if (step % 2000 == 0) {
         py::gil_scoped_acquire gil;
         if (PyErr_CheckSignals() != 0) {
           PyErr_Clear();
@@ -107,34 +242,30 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
         }
       }
     }
-    sim_time = run.data->time;
   }
+  std::string render_error;
+  if (!frames->Finish(&render_error)) throw std::runtime_error("render: " + render_error);
+  const long frame_count = frames->frame_count();
   if (!error.empty()) throw std::runtime_error("run_hopper: " + error);
   py::dict out;
-  out["hop"] = Array(table.hop);
-  out["t_start"] = Array(table.t_start);
-  out["t_end"] = Array(table.t_end);
-  out["cost"] = Array(table.cost);
-  out["I1"] = Array(table.I1);
-  out["I2"] = Array(table.I2);
-  out["I3"] = Array(table.I3);
-  out["I4"] = Array(table.I4);
-  out["T1"] = Array(table.T1);
-  out["T2"] = Array(table.T2);
-  out["step_length"] = Array(table.step_length);
-  out["speed"] = Array(table.speed);
-  out["apex"] = Array(table.apex);
-  out["alpha"] = Array(table.alpha);
-  out["accepted"] = Array(table.accepted);
-  out["du2"] = Array(table.du2);
-  out["dT2"] = Array(table.dt2);
+  for (size_t k = 0; k < kNumHopColumns; ++k) {
+    out[kHopColumns[k].name] =
+        kHopColumns[k].integer ? py::object(IntArray(hop_table[k])) : DoubleArray(hop_table[k]);
+  }
+  py::dict traj;
+  for (size_t k = 0; k < kNumTrajectoryColumns; ++k) {
+    traj[kTrajectoryColumns[k]] =
+        (k == 1 || k == 2) ? py::object(IntArray(trajectory[k])) : DoubleArray(trajectory[k]);
+  }
+  out["trajectory"] = traj;
   out["method"] = method_name;
   out["fell"] = fell;
   out["fall_reason"] = fall_reason;
-  out["sim_time"] = sim_time;
+  out["sim_time"] = run.data->time;
+  out["frames"] = frame_count;
   if (interrupted) {
     py::object cls = py::module_::import("ddoc").attr("SolveInterrupted");
-    py::object exc = cls("run_hopper interrupted after " + std::to_string(table.hop.size()) +
+    py::object exc = cls("run_hopper interrupted after " + std::to_string(hop_table[0].size()) +
                          " hops; the partial table is in .result");
     exc.attr("result") = out;
     PyErr_SetObject(cls.ptr(), exc.ptr());
@@ -146,18 +277,43 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
 }  // namespace
 
 void BindHopper(py::module_& mod) {
+#ifdef DDOC_HAVE_RENDER
+  mod.attr("HAVE_RENDER") = true;  // the module links ddoc_render, as ddoc_app_run does
+#else
+  mod.attr("HAVE_RENDER") = false;
+#endif
   mod.def("run_hopper", &RunHopper, py::arg("scenario"), py::arg("method") = "",
           py::arg("hops") = py::none(), py::arg("seconds") = py::none(), py::arg("robot") = "",
-          py::arg("model_mjcf") = "", py::arg("pushes") = std::vector<std::string>(),
-          py::arg("no_pushes") = false,
+          py::arg("model_mjcf") = "", py::arg("pushes") = py::list(),
+          py::arg("no_pushes") = false, py::arg("preset") = "",
+          py::arg("offline_latency") = py::none(), py::arg("log_every") = 1,
+          py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
+          py::arg("height") = 480, py::arg("fps") = 60.0,
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
-The arguments are ddoc-hopper's overrides (--method alg1|ocfb|mrl, --hops, --seconds, --robot,
---model-mjcf, --push 'TIME,FORCE,DURATION', --no-pushes); empty/None keeps the scenario's value.
+The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
+  method           "alg1" | "ocfb" | "mrl" (--method)
+  hops, seconds    --hops, --seconds (one alone: no limit on the other)
+  robot, model_mjcf  --robot, --model-mjcf
+  pushes           extra pushes (--push), each (time, force, duration) in s, N, s, or
+                   (hop, phase, force, duration) by the phase of a hop, or the command line's
+                   string 'TIME,FORCE,DURATION' / 'HOP@PHASE,FORCE,DURATION'
+  no_pushes        drop the scenario's pushes (--no-pushes)
+  preset           "default" | "paper" (--preset)
+  offline_latency  s (--offline-latency)
+  log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
+  progress         called after every hop with that hop's row (a dict of the table's columns);
+                   an exception raised in it ends the run and propagates
+  render_dir, width, height, fps  PNG frames, as --render/--width/--height/--fps (only when
+                   ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
+
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
-T2, step_length, speed, apex, alpha, accepted, du2, dT2), plus method, fell, fall_reason and
-sim_time. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
-ddoc.SolveInterrupted with the partial table in .result.)");
+T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted); 'trajectory', a
+dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
+thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
+sim_time and frames (PNG files written). ddoc.to_dataframe turns either table into a pandas
+DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
+ddoc.SolveInterrupted with the partial result in .result.)");
 }
 
 }  // namespace python

@@ -7,6 +7,10 @@
 #include <cmath>
 #include <cstdio>
 
+#ifdef DDOC_HAVE_RENDER
+#include "ddoc/render/frame_recorder.h"
+#endif
+
 namespace ddoc::app {
 
 int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv) {
@@ -240,5 +244,54 @@ StepOutcome RunStepper::Step() {
   if (!fall.empty()) return {StepOutcome::Kind::kFell, fall};
   return {};
 }
+
+#ifdef DDOC_HAVE_RENDER
+struct RunFrames::Impl {
+  std::unique_ptr<FrameRecorder> recorder;
+  Overlay overlay;
+};
+
+RunFrames::RunFrames(const Settings& s, const mjModel* m, const std::string& method,
+                     const std::string&) {
+  if (s.dir.empty()) return;
+  RenderSettings render;
+  render.dir = s.dir;
+  render.width = s.width;
+  render.height = s.height;
+  render.fps = s.fps;
+  std::string error;
+  if (!render.Validate(&error)) throw RunError(kExitBadInput, error);
+  impl_ = std::make_unique<Impl>();
+  impl_->recorder = FrameRecorder::Create(m, render, &error);
+  if (!impl_->recorder) throw RunError(kExitBadInput, error);
+  impl_->overlay.method = method;
+}
+
+void RunFrames::Capture(const mjModel* m, mjData* d, int hop, double cost, double speed) {
+  if (!impl_) return;
+  impl_->overlay.hop = hop;
+  impl_->overlay.last_cost = cost;
+  impl_->overlay.forward_speed = speed;
+  impl_->recorder->MaybeCapture(m, d, impl_->overlay);
+}
+
+bool RunFrames::Finish(std::string* error) { return !impl_ || impl_->recorder->Finish(error); }
+
+long RunFrames::frame_count() const {
+  return impl_ ? static_cast<long>(impl_->recorder->frame_count()) : 0;
+}
+#else
+struct RunFrames::Impl {};
+
+RunFrames::RunFrames(const Settings& s, const mjModel*, const std::string&,
+                     const std::string& flag) {
+  if (!s.dir.empty()) throw RunError(kExitBadInput, flag + ": this build has no OSMesa rendering");
+}
+void RunFrames::Capture(const mjModel*, mjData*, int, double, double) {}
+bool RunFrames::Finish(std::string*) { return true; }
+long RunFrames::frame_count() const { return 0; }
+#endif
+
+RunFrames::~RunFrames() = default;
 
 }  // namespace ddoc::app

@@ -142,6 +142,35 @@ class RunStepper {
   Eigen::Matrix<double, 14, 1> x_ = Eigen::Matrix<double, 14, 1>::Zero();
 };
 
+/// PNG frames of a run (ddoc-hopper --render, ddoc.run_hopper(render_dir=...)): a FrameRecorder
+/// with the hopper's overlay (method, hop, last cost, speed); nothing when `dir` is empty.
+class RunFrames {
+ public:
+  struct Settings {
+    std::string dir;  ///< PNG directory; empty: no frames
+    int width = 640, height = 480;
+    double fps = 60;
+  };
+  /// Throws RunError(kExitBadInput) for a bad setting, or a `dir` in a build without rendering;
+  /// `flag` names the option in the message ("--render" -> "--render: this build has no ...").
+  RunFrames(const Settings& settings, const mjModel* m, const std::string& method,
+            const std::string& flag);
+  ~RunFrames();
+  RunFrames(const RunFrames&) = delete;
+  RunFrames& operator=(const RunFrames&) = delete;
+  /// The frames due now (FrameRecorder::MaybeCapture); throws std::runtime_error naming the file.
+  void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed);
+  /// Waits for the queued writes; false and *error when one failed.
+  bool Finish(std::string* error);
+  /// Frames written or queued so far.
+  long frame_count() const;
+  bool active() const { return impl_ != nullptr; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace ddoc::app
 
 #endif  // DDOC_APP_HOPPER_RUN_H_

@@ -18,7 +18,6 @@
 #include "hopper_run.h"
 #include "run_log.h"
 #ifdef DDOC_HAVE_RENDER
-#include "ddoc/render/frame_recorder.h"
 #include "ddoc/render/video.h"
 #endif
 
@@ -60,67 +59,40 @@ int ParseOptions(int argc, char** argv, Options* o) {
   return -1;
 }
 
-// The frames of a run (none without --render). Every bad setting is reported before the run.
+// The frames of a run (none without --render; app::RunFrames) and the video. Every bad setting is
+// reported before the run.
 class Frames {
  public:
   // Throws RunError(kExitBadInput). `method` goes into the overlay.
-  Frames(const Options& o, const mjModel* m, const std::string& method);
-  void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed);  // throws
+  Frames(const Options& o, const mjModel* m, const std::string& method)
+      : frames_({o.render_dir, o.width, o.height, o.fps}, m, method, "--render") {}
+  void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed) {  // throws
+    frames_.Capture(m, d, hop, cost, speed);
+  }
   int Finish(const Options& o, int exit_code);
 
  private:
-#ifdef DDOC_HAVE_RENDER
-  std::unique_ptr<FrameRecorder> recorder_;
-  Overlay overlay_;
-#endif
+  RunFrames frames_;
 };
 
-#ifdef DDOC_HAVE_RENDER
-Frames::Frames(const Options& o, const mjModel* m, const std::string& method) {
-  if (o.render_dir.empty()) return;
-  overlay_.method = method;
-  RenderSettings render;
-  render.dir = o.render_dir;
-  render.width = o.width;
-  render.height = o.height;
-  render.fps = o.fps;
-  std::string error;
-  if (!render.Validate(&error)) throw RunError(kExitBadInput, error);
-  recorder_ = FrameRecorder::Create(m, render, &error);
-  if (!recorder_) throw RunError(kExitBadInput, error);
-}
-
-void Frames::Capture(const mjModel* m, mjData* d, int hop, double cost, double speed) {
-  if (!recorder_) return;
-  overlay_.hop = hop;
-  overlay_.last_cost = cost;
-  overlay_.forward_speed = speed;
-  recorder_->MaybeCapture(m, d, overlay_);  // throws std::runtime_error naming the file
-}
-
 int Frames::Finish(const Options& o, int exit_code) {
-  if (!recorder_) return exit_code;
+  if (!frames_.active()) return exit_code;
   std::string error;
-  if (!recorder_->Finish(&error)) {
+  if (!frames_.Finish(&error)) {
     std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
     return kExitError;
   }
+#ifdef DDOC_HAVE_RENDER
   if (o.video.empty()) return exit_code;
   if (!AssembleVideo(o.render_dir, o.fps, o.video, &error)) {
     std::fprintf(stderr, "ddoc-hopper: --video: %s\n", error.c_str());
     if (exit_code == kExitOk) return kExitError;
   }
+#else
+  (void)o;
+#endif
   return exit_code;
 }
-#else
-Frames::Frames(const Options& o, const mjModel*, const std::string&) {
-  if (!o.render_dir.empty()) {
-    throw RunError(kExitBadInput, "--render: this build has no OSMesa rendering");
-  }
-}
-void Frames::Capture(const mjModel*, mjData*, int, double, double) {}
-int Frames::Finish(const Options&, int exit_code) { return exit_code; }
-#endif
 
 // One run of ddoc-hopper: steps the loaded scenario and writes the logs as it goes.
 class HopperRun {

@@ -1,7 +1,9 @@
-"""ddoc.run_hopper gives the numbers of the command line's hops.csv, character for character.
+"""ddoc.run_hopper gives the numbers of the command line's hops.csv and trajectory.csv, character for
+character.
 
-Both run models/scenarios/default.xml for 3 hops with each method: ddoc-hopper writes hops.csv,
-ddoc.run_hopper returns the same columns as arrays, printed here with hops.csv's formats.
+Both run models/scenarios/default.xml for 3 hops with each method (with a push given as numbers in
+Python and as --push on the command line, and --preset paper): ddoc-hopper writes the CSVs,
+ddoc.run_hopper returns the same columns as arrays, printed here with the CSVs' formats.
 """
 import csv
 import os
@@ -23,32 +25,135 @@ pytestmark = pytest.mark.skipif(not hasattr(ddoc, "run_hopper"),
 FORMATS = [("hop", "%d"), ("t_start", "%.6f"), ("t_end", "%.6f"), ("cost", "%.9g"),
            ("I1", "%.9g"), ("I2", "%.9g"), ("I3", "%.9g"), ("I4", "%.9g"), ("T1", "%.6f"),
            ("T2", "%.6f"), ("step_length", "%.6f"), ("speed", "%.6f"), ("apex", "%.6f"),
-           ("alpha", "%.6g"), ("accepted", "%d"), ("du2", "%.9g"), ("dT2", "%.9g")]
+           ("alpha", "%.6g"), ("accepted", "%d"), ("du2", "%.9g"), ("dT2", "%.9g"),
+           ("start_shift", "%.9g"), ("restarted", "%d")]
 
 
-@pytest.mark.parametrize("method", ["alg1", "mrl", "ocfb"])
-def test_run_hopper_equals_cli_hops_csv(tmp_path, method):
+# trajectory.csv's columns and formats (RunLog::WriteSample): t, hop, phase, 14 coordinates and
+# rates, 4 inputs, push.
+TRAJECTORY_FORMATS = ["%.6f", "%d", "%d"] + ["%.7g"] * 18 + ["%.4g"]
+
+# Per method, extra overrides given to both: a push by hop phase (a tuple in Python, a string on the
+# command line), the paper preset.
+EXTRA = {"alg1": ([(2, 0.25, 20.0, 0.1)], ["--push", "2@0.25,20,0.1"], ""),
+         "mrl": ([], [], ""),
+         "ocfb": ([(0.4, -15.0, 0.05)], ["--push", "0.4,-15,0.05", "--preset", "paper"], "paper")}
+
+
+def cli_run(tmp_path, args):
     cli = BIN / "ddoc-hopper"
     if not cli.exists():
         pytest.skip(f"{cli} not built")
     out = tmp_path / "cli"
-    run = subprocess.run([str(cli), SCENARIO, "--hops", "3", "--method", method, "--out", str(out)],
+    run = subprocess.run([str(cli), SCENARIO, *args, "--out", str(out)],
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
+    return out
+
+
+@pytest.mark.parametrize("method", ["alg1", "mrl", "ocfb"])
+def test_run_hopper_equals_cli_hops_and_trajectory_csv(tmp_path, method):
+    pushes, push_args, preset = EXTRA[method]
+    out = cli_run(tmp_path, ["--hops", "3", "--method", method, *push_args])
     with open(out / "hops.csv") as f:
         rows = list(csv.DictReader(f))
-    table = ddoc.run_hopper(SCENARIO, method=method, hops=3)
+    table = ddoc.run_hopper(SCENARIO, method=method, hops=3, pushes=pushes, preset=preset)
     assert table["method"] == method and not table["fell"]
     assert len(rows) == len(table["hop"]) == 3
     for i, row in enumerate(rows):
         for name, fmt in FORMATS:
             assert fmt % table[name][i] == row[name], (i, name, table[name][i], row[name])
         assert row["method"] == method
+    with open(out / "trajectory.csv") as f:
+        lines = f.read().splitlines()
+    trajectory = table["trajectory"]
+    assert lines[0].split(",") == list(trajectory)  # the same columns in the same order
+    assert len(lines) - 1 == len(trajectory["t"]) > 1000
+    columns = list(trajectory.values())
+    for i, line in enumerate(lines[1:]):
+        mine = ",".join(fmt % c[i] for fmt, c in zip(TRAJECTORY_FORMATS, columns))
+        assert mine == line, (i, mine, line)
+    if pushes:  # the push acted
+        assert max(abs(trajectory["push"])) > 0
+
+
+def test_run_hopper_pushes_as_numbers_equal_strings():
+    kw = dict(method="ocfb", hops=3, log_every=0)
+    numbers = ddoc.run_hopper(SCENARIO, pushes=[(0.3, 25.0, 0.1), (2, 0.5, -10.0, 0.05)], **kw)
+    strings = ddoc.run_hopper(SCENARIO, pushes=["0.3,25,0.1", "2@0.5,-10,0.05"], **kw)
+    plain = ddoc.run_hopper(SCENARIO, **kw)
+    for name, _ in FORMATS:
+        assert list(numbers[name]) == list(strings[name]), name
+    assert list(numbers["cost"]) != list(plain["cost"])  # the pushes changed the run
+    assert len(numbers["trajectory"]["t"]) == 0  # log_every=0: no trajectory
+
+
+def test_run_hopper_log_every():
+    every = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1)["trajectory"]
+    tenth = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, log_every=10)["trajectory"]
+    assert len(tenth["t"]) == len(every["t"]) // 10
+    assert list(tenth["x"]) == list(every["x"][9::10][:len(tenth["x"])])
+
+
+def test_run_hopper_progress_rows_and_exception():
+    rows = []
+    table = ddoc.run_hopper(SCENARIO, method="alg1", hops=3, log_every=0, progress=rows.append)
+    assert [r["hop"] for r in rows] == [0, 1, 2]
+    for i, row in enumerate(rows):
+        assert set(row) == {name for name in table if name not in (
+            "trajectory", "method", "fell", "fall_reason", "sim_time", "frames")}
+        for name, value in row.items():
+            assert value == table[name][i], (i, name)
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_second(row):
+        if row["hop"] == 1:
+            raise Stop("from the callback")
+
+    with pytest.raises(Stop, match="from the callback"):
+        ddoc.run_hopper(SCENARIO, method="alg1", hops=5, progress=stop_at_second)
+    # The controller was detached: the next run runs.
+    assert len(ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, log_every=0)["hop"]) == 1
+
+
+def test_run_hopper_render(tmp_path):
+    frames = tmp_path / "frames"
+    if not ddoc.HAVE_RENDER:
+        with pytest.raises(ValueError, match="render"):
+            ddoc.run_hopper(SCENARIO, hops=1, render_dir=str(frames))
+        return
+    table = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, render_dir=str(frames), width=96,
+                            height=64, fps=20, log_every=0)
+    files = sorted(frames.glob("frame_*.png"))
+    assert table["frames"] == len(files)
+    # One frame per 1/fps of simulated time, the first at t = 0 (FrameRecorder's clock).
+    assert len(files) == int(table["sim_time"] * 20 + 1e-9) + 1
+    assert files[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ValueError, match="width"):
+        ddoc.run_hopper(SCENARIO, hops=1, render_dir=str(frames), width=-5)
 
 
 def test_run_hopper_bad_input():
     with pytest.raises(ValueError, match="method"):
         ddoc.run_hopper(SCENARIO, method="bogus", hops=1)
+    with pytest.raises(ValueError, match="preset \"bogus\": expected default or paper"):
+        ddoc.run_hopper(SCENARIO, preset="bogus", hops=1)
+    with pytest.raises(ValueError, match=r"pushes\[1\]: expected \(time, force, duration\) or "
+                       r"\(hop, phase, force, duration\), got a sequence of length 2"):
+        ddoc.run_hopper(SCENARIO, pushes=[(0.1, 1.0, 0.1), (1.0, 2.0)], hops=1)
+    with pytest.raises(ValueError, match=r"pushes\[0\]\[1\]: expected a number, got 'a'"):
+        ddoc.run_hopper(SCENARIO, pushes=[(0.1, "a", 0.1)], hops=1)
+    with pytest.raises(ValueError, match=r"pushes\[0\]: .*duration > 0"):
+        ddoc.run_hopper(SCENARIO, pushes=[(0.1, 5.0, -0.1)], hops=1)
+    with pytest.raises(ValueError, match=r'pushes\[0\]: --push "1@1.5,5.0,0.1": hop must be an '
+                       r"integer >= 1, phase in \[0, 1\)"):
+        ddoc.run_hopper(SCENARIO, pushes=[(1, 1.5, 5.0, 0.1)], hops=1)
+    with pytest.raises(ValueError, match="log_every must be >= 0, got -1"):
+        ddoc.run_hopper(SCENARIO, hops=1, log_every=-1)
+    with pytest.raises(ValueError, match="progress: expected a callable"):
+        ddoc.run_hopper(SCENARIO, hops=1, progress=3)
     with pytest.raises(ValueError, match="no_such_file.xml"):
         ddoc.run_hopper(str(ROOT / "no_such_file.xml"), hops=1)
 
