@@ -120,7 +120,9 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   if (o.hops && *o.hops < 0) {
     throw ScenarioError("--hops must be >= 0, got " + std::to_string(*o.hops));
   }
-  if (o.seconds && !(*o.seconds >= 0)) throw ScenarioError("--seconds must be >= 0");
+  if (o.seconds && !(*o.seconds >= 0 && std::isfinite(*o.seconds))) {
+    throw ScenarioError("--seconds must be a finite number >= 0");
+  }
   if (o.hops) s.hops = *o.hops;
   if (o.seconds) s.seconds = *o.seconds;
   if (o.hops && !o.seconds) s.seconds = 0;

@@ -376,7 +376,9 @@ void ValidateScenario(const Scenario& s) {
     Fail(f, 0, "model MJCF \"" + s.model_mjcf + "\" does not exist");
   }
   if (s.hops < 0) Fail(f, 0, "hops must be >= 0, got " + std::to_string(s.hops));
-  if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) Fail(f, 0, "seconds must be >= 0");
+  if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) {
+    Fail(f, 0, "seconds must be a finite number >= 0");
+  }
   if (s.hops == 0 && s.seconds == 0.0) Fail(f, 0, "give a number of hops or of seconds");
   for (const Push& p : s.pushes) {
     if (!(p.time >= 0.0) || !std::isfinite(p.time)) Fail(f, 0, "push time must be >= 0");
@@ -429,8 +431,9 @@ Push ParsePush(const std::string& text) {
   std::vector<double> v;
   try {
     v = ParseNumberList(text, 3, "--push");
-  } catch (const ScenarioError&) {
-    throw ScenarioError("--push \"" + text + "\": expected TIME,FORCE,DURATION (three numbers)");
+  } catch (const ScenarioError& e) {
+    const std::string why = std::string(e.what()).substr(std::string("--push: ").size());
+    throw ScenarioError("--push \"" + text + "\": " + why + "; expected TIME,FORCE,DURATION");
   }
   const Push p{v[0], v[1], v[2]};
   if (!(p.time >= 0.0) || !(p.duration > 0.0)) {
