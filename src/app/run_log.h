@@ -55,10 +55,8 @@ struct Summary {
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
   std::vector<Push> pushes;
-  // How the run ended: running | completed | fell | interrupted | io_error | nonfinite_state |
-  // error (the exit codes of ddoc-hopper, docs/reliability.md).
-  std::string end = "running";
-  std::string end_message;   // what ended it ("" while running or completed)
+  std::string end = "running";  // running|completed|fell|interrupted|io_error|nonfinite_state|error
+  std::string end_message;      // what ended it ("" while running or completed)
 
   /// Counts a completed hop: hops, final cost and I4, accepted/rejected, the first converged
   /// and line-search-stopped hops, the learner status ("none" when `learns` is false), means.
