@@ -12,6 +12,7 @@ packages=(
   libbenchmark-dev libgtest-dev googletest zlib1g-dev nlohmann-json3-dev
   ffmpeg python3-matplotlib
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
+  clang libclang-rt-14-dev
 )
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq

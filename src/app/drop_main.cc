@@ -28,27 +28,6 @@
 
 namespace {
 
-// Parses "a,b,c" into exactly n numbers; throws std::invalid_argument naming the option.
-std::vector<double> ParseList(const std::string& text, size_t n, const char* option) {
-  std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      throw std::invalid_argument(std::string(option) + ": '" + item + "' is not a number");
-    }
-  }
-  if (v.size() != n) {
-    throw std::invalid_argument(std::string(option) + ": got " + std::to_string(v.size()) +
-                                " values, expected " + std::to_string(n));
-  }
-  return v;
-}
-
 const char* kFlightNames[14] = {"x",  "y",  "theta",  "phi",  "r",  "k_hip",  "k_leg",
                                 "xd", "yd", "thetad", "phid", "rd", "k_hipd", "k_legd"};
 const char* kStanceNames[10] = {"theta",  "phi",  "r",  "k_hip",  "k_leg",
@@ -75,11 +54,11 @@ void StartState(const Options& o, Eigen::Matrix<double, 14, 1>* x0, Eigen::Vecto
     throw std::invalid_argument("give --state and --u, or --nominal SPEED");
   }
   if (!o.state.empty()) {
-    const std::vector<double> v = ParseList(o.state, 14, "--state");
+    const std::vector<double> v = ddoc::app::ParseNumberList(o.state, 14, "--state");
     for (int i = 0; i < 14; ++i) (*x0)(i) = v[static_cast<size_t>(i)];
   }
   if (!o.input.empty()) {
-    const std::vector<double> v = ParseList(o.input, 4, "--u");
+    const std::vector<double> v = ddoc::app::ParseNumberList(o.input, 4, "--u");
     for (int i = 0; i < 4; ++i) (*u)(i) = v[static_cast<size_t>(i)];
   }
   const Eigen::Vector4d lo = ddoc::hopper::InputLowerBound(), hi = ddoc::hopper::InputUpperBound();

@@ -142,7 +142,9 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   if (o.hops && *o.hops < 0) {
     throw ScenarioError("--hops must be >= 0, got " + std::to_string(*o.hops));
   }
-  if (o.seconds && !(*o.seconds >= 0)) throw ScenarioError("--seconds must be >= 0");
+  if (o.seconds && !(*o.seconds >= 0 && std::isfinite(*o.seconds))) {
+    throw ScenarioError("--seconds must be a finite number >= 0");
+  }
   if (o.hops) s.hops = *o.hops;
   if (o.seconds) s.seconds = *o.seconds;
   if (o.hops && !o.seconds) s.seconds = 0;
@@ -221,12 +223,54 @@ void RunStepper::HopStarted(double t_start) {
   }
 }
 
+namespace {
+
+// MuJoCo's counts of the NaN/Inf/huge-value warnings (mj_checkPos/Vel/Acc reset the state).
+int BadValueWarnings(const mjData* d) {
+  return d->warning[mjWARN_BADQPOS].number + d->warning[mjWARN_BADQVEL].number +
+         d->warning[mjWARN_BADQACC].number;
+}
+
+// "" when qpos, qvel, qacc and ctrl are finite and MuJoCo reported no bad value in this step.
+// `t` is the time of the step (MuJoCo's reset sets d->time to 0).
+std::string NonFiniteReason(const mjModel* m, const mjData* d, int warnings_before, double t) {
+  char buf[200];
+  if (BadValueWarnings(d) > warnings_before) {
+    const char* what = d->warning[mjWARN_BADQACC].number > 0   ? "qacc"
+                       : d->warning[mjWARN_BADQVEL].number > 0 ? "qvel"
+                                                               : "qpos";
+    std::snprintf(buf, sizeof(buf),
+                  "non-finite state: MuJoCo found a NaN, Inf or huge value in %s at t = %.4f s "
+                  "(the simulation is unstable; MuJoCo reset the state)",
+                  what, t);
+    return buf;
+  }
+  auto finite = [](const mjtNum* v, int n) {
+    for (int i = 0; i < n; ++i) {
+      if (!std::isfinite(v[i])) return false;
+    }
+    return true;
+  };
+  const char* what = !finite(d->qpos, m->nq)   ? "qpos"
+                     : !finite(d->qvel, m->nv) ? "qvel"
+                     : !finite(d->qacc, m->nv) ? "qacc"
+                     : !finite(d->ctrl, m->nu) ? "ctrl"
+                                               : nullptr;
+  if (what == nullptr) return "";
+  std::snprintf(buf, sizeof(buf), "non-finite state: mjData %s is not finite at t = %.4f s", what,
+                t);
+  return buf;
+}
+
+}  // namespace
+
 StepOutcome RunStepper::Step() {
   const mjModel* m = run_->model.get();
   mjData* d = run_->data.get();
   plugin::HopperController& c = *run_->controller;
   push_ = pushes_ ? PushForce(pushes_now_, d->time) : 0.0;
   ApplyDragAndPush(c.mapping(), m, d, push_);
+  const int warnings_before = BadValueWarnings(d);
   const double t_before = d->time;
   mj_step(m, d);
   if (c.hop() != hop_) {  // the takeoff at the control of this step began hop c.hop()
@@ -235,7 +279,13 @@ StepOutcome RunStepper::Step() {
   }
   if (c.offline_pending()) c.RunOffline();  // between steps, outside mjcb_control
   if (c.failed()) return {StepOutcome::Kind::kFailed, c.error()};
+  const std::string non_finite = NonFiniteReason(m, d, warnings_before, t_before);
+  if (!non_finite.empty()) return {StepOutcome::Kind::kNonFinite, non_finite};
   x_ = FlightState(c.mapping(), d, c.vsa());
+  if (!x_.allFinite()) {
+    return {StepOutcome::Kind::kNonFinite, "non-finite state: the measured hopper state is not "
+                                           "finite at t = " + std::to_string(d->time) + " s"};
+  }
   if (c.mode() != mode_) {
     mode_ = c.mode();
     phase_start_ = d->time;

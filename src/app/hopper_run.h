@@ -23,11 +23,14 @@ class App;
 
 namespace ddoc::app {
 
-/// Exit codes of the hopper tools.
-constexpr int kExitOk = 0;
-constexpr int kExitError = 1;
-constexpr int kExitBadInput = 2;
-constexpr int kExitFall = 3;
+/// Exit codes of the hopper tools (docs/reliability.md: the fault cases).
+constexpr int kExitOk = 0;           ///< completed
+constexpr int kExitError = 1;        ///< internal error (the message says what)
+constexpr int kExitBadInput = 2;     ///< bad input, reported before the simulation starts
+constexpr int kExitFall = 3;         ///< the robot fell (a valid result)
+constexpr int kExitInterrupted = 4;  ///< SIGINT or SIGTERM
+constexpr int kExitIo = 5;           ///< a log write failed (disk full, size limit, dir gone)
+constexpr int kExitNonFinite = 6;    ///< a NaN, Inf or huge value in mjData
 
 /// An error that ends a tool with `code` (kExitBadInput or kExitError); the message names it.
 class RunError : public std::runtime_error {
@@ -96,9 +99,11 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
 
 /// What one step of a run ended with.
 struct StepOutcome {
-  enum class Kind { kOk, kFailed, kFell };
+  // kFailed: the controller failed; kFell: a fall limit; kNonFinite: MuJoCo found a NaN, Inf or
+  // huge value in qpos, qvel or qacc (and reset the state), or the state is not finite.
+  enum class Kind { kOk, kFailed, kFell, kNonFinite };
   Kind kind = Kind::kOk;
-  std::string reason;  ///< the controller's error, or why the robot fell
+  std::string reason;  ///< the controller's error, or why the robot fell, or what is not finite
 };
 
 /// Steps a loaded run: drag and the active pushes into xfrc_applied, mj_step (the controller runs

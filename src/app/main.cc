@@ -3,14 +3,19 @@
 // ddoc-hopper: runs a hopper scenario headless. The true robot is the MJCF hopper stepped by
 // MuJoCo; the controller plugin (plugin/) runs Algorithm 1, OC-FB or mRL in mjcb_control.
 //
-// Exit codes: 0 success, 1 internal error, 2 bad input, 3 the robot fell.
+// Exit codes (hopper_run.h; docs/reliability.md): 0 completed, 1 internal error, 2 bad input,
+// 3 the robot fell, 4 interrupted (SIGINT/SIGTERM), 5 a log write failed, 6 non-finite state.
+// Every one but 2 leaves every completed hop in hops.csv and "end" in summary.json.
 #include <unistd.h>
+
+#include <csignal>
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,6 +29,24 @@
 namespace ddoc::app {
 namespace {
 
+// The signal that asked the run to stop (SIGINT or SIGTERM), 0 while none did.
+volatile std::sig_atomic_t g_stop_signal = 0;
+
+extern "C" void OnStopSignal(int signal) { g_stop_signal = signal; }
+
+// SIGINT and SIGTERM end the run after the current step, with the logs complete; a second one
+// kills it (SA_RESETHAND). A file size limit makes a write fail (EFBIG, reported as an I/O
+// error) instead of killing the process with SIGXFSZ.
+void InstallSignalHandlers() {
+  struct sigaction sa = {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESETHAND;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);
+}
+
 struct Options {
   std::string scenario, out, render_dir, video;
   int width = 640, height = 480, log_every = 1;
@@ -36,7 +59,10 @@ struct Options {
 int ParseOptions(int argc, char** argv, Options* o) {
   CLI::App cli{
       "ddoc-hopper: data-driven iterative optimal control (Algorithm 1) of the MuJoCo hopper.\n"
-      "Exit codes: 0 success, 1 internal error, 2 bad input, 3 the robot fell."};
+      "Exit codes: 0 completed, 1 internal error, 2 bad input, 3 the robot fell, 4 interrupted\n"
+      "(SIGINT/SIGTERM), 5 a log write failed (disk full, file size limit, output directory\n"
+      "gone), 6 non-finite state. Completed hops are always in hops.csv; summary.json's \"end\"\n"
+      "says how the run ended."};
   cli.add_option("scenario", o->scenario, "scenario XML file (see models/scenarios/)")->required();
   cli.add_option("--out,-o", o->out, "output directory (default: out/<scenario name>)");
   o->run.Register(&cli, true);
@@ -98,12 +124,16 @@ int Frames::Finish(const Options& o, int exit_code) {
 class HopperRun {
  public:
   HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* frames);
-  // Steps until the scenario's hops or seconds, a fall or an error; returns the exit code.
+  // Steps until the scenario's hops or seconds, a fall, a signal or an error; returns the exit
+  // code, with summary_.end saying how the run ended.
   int Loop();
   // Final summary and messages; returns the exit code.
   int Finish(int exit_code);
 
  private:
+  int Steps();  // Loop without the log-error handling
+  // Records how the run ended (summary.json's end, end_message) and returns `exit_code`.
+  int End(int exit_code, const char* end, const std::string& message);
   bool Done() const;
   bool Capture();  // the frame due now; false (and the reason in the summary) on an error
   void LogStep();
@@ -121,6 +151,7 @@ class HopperRun {
   long step_ = 0;
   double last_cost_ = std::nan(""), last_speed_ = std::nan("");
   std::vector<bool> push_started_, push_ended_;
+  std::deque<plugin::HopReport> pending_;  // hops taken from the controller, not yet in hops.csv
   bool progress_;
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
 };
@@ -162,26 +193,66 @@ bool HopperRun::Capture() {
   }
 }
 
+int HopperRun::End(int exit_code, const char* end, const std::string& message) {
+  summary_.end = end;
+  summary_.end_message = message;
+  return exit_code;
+}
+
 int HopperRun::Loop() {
-  if (!Capture()) return kExitError;  // frame 0 shows the start state
+  try {
+    return Steps();
+  } catch (const RunLogError& e) {
+    // Keep what can be kept: the hops completed in the failing step go to hops.csv if it still
+    // takes writes (the failed file is usually trajectory.csv, the largest).
+    for (const plugin::HopReport& h : run_->controller->TakeReports()) pending_.push_back(h);
+    for (const plugin::HopReport& h : pending_) {
+      try {
+        log_->WriteHop(h);
+        summary_.AddHop(h, run_->scenario.method != Method::kOcfb);
+      } catch (const RunLogError&) {
+        break;
+      }
+    }
+    if (progress_) std::fputc('\n', stderr);
+    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+    return End(kExitIo, "io_error", e.what());
+  }
+}
+
+int HopperRun::Steps() {
+  if (!Capture()) return End(kExitError, "error", summary_.fall_reason);  // frame 0: the start
   while (!Done()) {
+    if (g_stop_signal != 0) {
+      const std::string message = std::string("interrupted by ") +
+                                  (g_stop_signal == SIGINT ? "SIGINT" : "SIGTERM") + " at t = " +
+                                  std::to_string(run_->data->time) + " s";
+      if (progress_) std::fputc('\n', stderr);
+      std::fprintf(stderr, "ddoc-hopper: %s\n", message.c_str());
+      return End(kExitInterrupted, "interrupted", message);
+    }
     const StepOutcome outcome = stepper_.Step();
     ++step_;
     if (outcome.kind == StepOutcome::Kind::kFailed) {
       std::fprintf(stderr, "\nddoc-hopper: %s\n", outcome.reason.c_str());
       summary_.fall_reason = outcome.reason;
-      return kExitError;
+      return End(kExitError, "error", outcome.reason);
     }
     LogStep();
     LogPushEvents();
     LogHops();
-    if (!Capture()) return kExitError;
+    if (!Capture()) return End(kExitError, "error", summary_.fall_reason);
     if (outcome.kind == StepOutcome::Kind::kFell) {
       Fell(outcome.reason);
-      return kExitFall;
+      return End(kExitFall, "fell", outcome.reason);
+    }
+    if (outcome.kind == StepOutcome::Kind::kNonFinite) {
+      if (progress_) std::fputc('\n', stderr);
+      std::fprintf(stderr, "ddoc-hopper: %s\n", outcome.reason.c_str());
+      return End(kExitNonFinite, "nonfinite_state", outcome.reason);
     }
   }
-  return kExitOk;
+  return End(kExitOk, "completed", "");
 }
 
 void HopperRun::LogStep() {
@@ -226,13 +297,17 @@ void HopperRun::LogPushEvents() {
 
 void HopperRun::LogHops() {
   const bool learns = run_->scenario.method != Method::kOcfb;
-  for (const plugin::HopReport& h : run_->controller->TakeReports()) {
+  for (const plugin::HopReport& h : run_->controller->TakeReports()) pending_.push_back(h);
+  while (!pending_.empty()) {
+    // The hop row first (flushed), so a failing write of another file never loses a hop.
+    const plugin::HopReport h = pending_.front();
+    pending_.pop_front();
+    log_->WriteHop(h);
+    summary_.AddHop(h, learns);
     const Eigen::Vector4d& td = h.body_touchdown;
     const Eigen::Vector4d& to = h.body_takeoff;
     log_->WriteEvent({h.t_touchdown, h.hop, "touchdown", td(0), td(1), td(2), td(3)});
     log_->WriteEvent({h.t_end, h.hop, "takeoff", to(0), to(1), to(2), to(3)});
-    log_->WriteHop(h);
-    summary_.AddHop(h, learns);
     summary_.sim_time_s = run_->data->time;
     summary_.wall_time_s = WallTime();
     log_->WriteSummary(summary_);
@@ -262,16 +337,31 @@ int HopperRun::Finish(int exit_code) {
   if (progress_) std::fputc('\n', stderr);
   summary_.sim_time_s = run_->data->time;
   summary_.wall_time_s = WallTime();
-  log_->WriteSummary(summary_);
-  log_->Flush();
+  try {
+    log_->Flush();
+  } catch (const RunLogError& e) {
+    if (exit_code != kExitIo) {
+      std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+      exit_code = End(kExitIo, "io_error", e.what());
+    }
+  }
+  try {
+    log_->WriteSummary(summary_);
+  } catch (const RunLogError& e) {
+    std::fprintf(stderr, "ddoc-hopper: summary.json does not record the end (%s): %s\n",
+                 summary_.end.c_str(), e.what());
+    if (exit_code == kExitOk || exit_code == kExitFall) exit_code = kExitIo;
+  }
+  log_->FlushQuietly();
   exit_code = frames_->Finish(o_, exit_code);
   std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s, final cost %.4g, wrote %s\n",
                summary_.scenario.c_str(), summary_.method.c_str(), summary_.hops,
-               summary_.fell ? "FELL" : "no fall", summary_.final_cost, o_.out.c_str());
+               summary_.fell ? "FELL" : summary_.end.c_str(), summary_.final_cost, o_.out.c_str());
   return exit_code;
 }
 
 int Run(int argc, char** argv) {
+  InstallSignalHandlers();
   Options o;
   const int parsed = ParseOptions(argc, argv, &o);
   if (parsed >= 0) return parsed;
@@ -285,8 +375,13 @@ int Run(int argc, char** argv) {
   } catch (const std::exception& e) {
     throw RunError(kExitBadInput, e.what());
   }
-  HopperRun hopper(o, &run, log.get(), &frames);
-  return hopper.Finish(hopper.Loop());
+  std::unique_ptr<HopperRun> hopper;
+  try {
+    hopper = std::make_unique<HopperRun>(o, &run, log.get(), &frames);  // writes summary.json
+  } catch (const RunLogError& e) {
+    throw RunError(kExitBadInput, e.what());
+  }
+  return hopper->Finish(hopper->Loop());
 }
 
 }  // namespace

@@ -155,7 +155,10 @@ std::string ReturnMap::ToNextTakeoff(plugin::HopReport* report) {
       *report = reports.back();
       return "";
     }
-    if (outcome.kind == StepOutcome::Kind::kFell) return outcome.reason;
+    // A non-finite state from a perturbed restart counts as a fall of that restart.
+    if (outcome.kind == StepOutcome::Kind::kFell || outcome.kind == StepOutcome::Kind::kNonFinite) {
+      return outcome.reason;
+    }
   }
 }
 

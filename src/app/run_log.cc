@@ -1,6 +1,8 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "run_log.h"
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -12,9 +14,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
+std::string Reason(int error) { return error != 0 ? std::strerror(error) : "write error"; }
+
 std::FILE* OpenOrThrow(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) throw std::runtime_error("cannot open \"" + path + "\" for writing");
+  if (f == nullptr) {
+    throw RunLogError("cannot open \"" + path + "\" for writing: " + Reason(errno));
+  }
   return f;
 }
 
@@ -44,7 +50,7 @@ RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(
   std::error_code ec;
   fs::create_directories(dir_, ec);
   if (ec || !fs::is_directory(dir_)) {
-    throw std::runtime_error("cannot create output directory \"" + dir_ + "\"" +
+    throw RunLogError("cannot create output directory \"" + dir_ + "\"" +
                              (ec ? ": " + ec.message() : ""));
   }
   hops_ = OpenOrThrow(dir_ + "/hops.csv");
@@ -64,31 +70,51 @@ RunLog::~RunLog() {
   }
 }
 
+void RunLog::Check(std::FILE* f, const char* name, bool ok) {
+  if (ok && !std::ferror(f)) return;
+  const int error = errno;
+  throw RunLogError("cannot write \"" + dir_ + "/" + name + "\": " + Reason(error));
+}
+
 void RunLog::WriteHop(const plugin::HopReport& h) {
-  std::fprintf(hops_,
+  errno = 0;
+  const int n = std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
                "%s,%.9g,%d\n",
                h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
                h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
                h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0);
-  Flush();
+  Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 
 void RunLog::WriteSample(const SampleRecord& s) {
-  std::fprintf(trajectory_, "%.6f,%d,%d", s.t, s.hop, s.phase);
-  for (double v : s.q) std::fprintf(trajectory_, ",%.7g", v);
-  for (double v : s.u) std::fprintf(trajectory_, ",%.7g", v);
-  std::fprintf(trajectory_, ",%.4g\n", s.push);
+  errno = 0;
+  bool ok = std::fprintf(trajectory_, "%.6f,%d,%d", s.t, s.hop, s.phase) >= 0;
+  for (double v : s.q) ok = std::fprintf(trajectory_, ",%.7g", v) >= 0 && ok;
+  for (double v : s.u) ok = std::fprintf(trajectory_, ",%.7g", v) >= 0 && ok;
+  ok = std::fprintf(trajectory_, ",%.4g\n", s.push) >= 0 && ok;
+  Check(trajectory_, "trajectory.csv", ok);
 }
 
 void RunLog::WriteEvent(const EventRecord& e) {
-  std::fprintf(events_, "%.6f,%d,%s,%.6f,%.6f,%.6f,%.6f\n", e.t, e.hop, e.type.c_str(), e.x, e.y,
-               e.xd, e.yd);
+  errno = 0;
+  const int n = std::fprintf(events_, "%.6f,%d,%s,%.6f,%.6f,%.6f,%.6f\n", e.t, e.hop,
+                             e.type.c_str(), e.x, e.y, e.xd, e.yd);
+  Check(events_, "events.csv", n >= 0);
   Flush();
 }
 
 void RunLog::Flush() {
-  for (std::FILE* f : {hops_, trajectory_, events_}) std::fflush(f);
+  errno = 0;
+  Check(hops_, "hops.csv", std::fflush(hops_) == 0);
+  Check(events_, "events.csv", std::fflush(events_) == 0);
+  Check(trajectory_, "trajectory.csv", std::fflush(trajectory_) == 0);
+}
+
+void RunLog::FlushQuietly() noexcept {
+  for (std::FILE* f : {hops_, trajectory_, events_}) {
+    if (f != nullptr) std::fflush(f);
+  }
 }
 
 void RunLog::WriteSummary(const Summary& s) {
@@ -113,6 +139,8 @@ void RunLog::WriteSummary(const Summary& s) {
   j["rejected"] = s.rejected;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;
+  j["end"] = s.end;
+  j["end_message"] = s.end_message;
   j["pushes"] = nlohmann::json::array();
   for (const Push& p : s.pushes) {
     j["pushes"].push_back({{"t", p.time}, {"force", p.force}, {"duration", p.duration}});
@@ -130,13 +158,15 @@ void RunLog::WriteSummary(const Summary& s) {
   }
   const std::string tmp = dir_ + "/summary.json.tmp";
   {
+    errno = 0;
     std::ofstream out(tmp);
     out << j.dump(2) << "\n";
-    if (!out) throw std::runtime_error("cannot write \"" + tmp + "\"");
+    out.flush();
+    if (!out) throw RunLogError("cannot write \"" + tmp + "\": " + Reason(errno));
   }
   std::error_code ec;
   fs::rename(tmp, dir_ + "/summary.json", ec);
-  if (ec) throw std::runtime_error("cannot write \"" + dir_ + "/summary.json\": " + ec.message());
+  if (ec) throw RunLogError("cannot write \"" + dir_ + "/summary.json\": " + ec.message());
 }
 
 }  // namespace ddoc::app

@@ -2,12 +2,14 @@
 //
 // The output files of one ddoc-hopper run (formats in docs/hopper.md, "Output files").
 // Every file is flushed as it grows, and summary.json is rewritten after every hop,
-// so a run that falls keeps everything up to the fall.
+// so a run that falls keeps everything up to the fall. Every write is checked: a failed one
+// (full disk, file size limit, output directory gone) throws RunLogError naming the file.
 #ifndef DDOC_APP_RUN_LOG_H_
 #define DDOC_APP_RUN_LOG_H_
 
 #include <cstdio>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -15,6 +17,12 @@
 #include "scenario.h"
 
 namespace ddoc::app {
+
+/// A write of the run log failed; the message names the file and the system's reason.
+class RunLogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 /// One row of trajectory.csv.
 struct SampleRecord {
@@ -51,6 +59,8 @@ struct Summary {
   std::vector<Push> pushes;          // timed pushes, then the hop pushes resolved so far
   std::vector<HopPush> hop_pushes;   // the scenario's pushes by hop phase
   std::vector<std::optional<double>> hop_push_times;  // their start, once resolved
+  std::string end = "running";  // running|completed|fell|interrupted|io_error|nonfinite_state|error
+  std::string end_message;      // what ended it ("" while running or completed)
 
   /// Counts a completed hop: hops, final cost and I4, accepted/rejected, the first converged
   /// and line-search-stopped hops, the learner status ("none" when `learns` is false), means.
@@ -63,14 +73,16 @@ struct Summary {
 /// Opens DIR/{hops,trajectory,events}.csv (creating DIR) and writes the headers.
 class RunLog {
  public:
-  /// Throws std::runtime_error naming the path when the directory cannot be created
+  /// Throws RunLogError naming the path when the directory cannot be created
   /// or a file cannot be opened.
   explicit RunLog(const std::string& dir, std::string method);
   ~RunLog();
   RunLog(const RunLog&) = delete;
   RunLog& operator=(const RunLog&) = delete;
 
-  /// Appends and flushes a hop row (hops.csv: one hop is one trial of Algorithm 1).
+  // Each write below throws RunLogError naming the file when it (or its flush) fails.
+  /// Appends and flushes a hop row (hops.csv: one hop is one trial of Algorithm 1); flushes
+  /// hops.csv only, so that a failing other file cannot keep a hop out of it.
   void WriteHop(const plugin::HopReport& hop);
   /// Appends a sample; flushed at the next hop or event.
   void WriteSample(const SampleRecord& sample);
@@ -80,10 +92,15 @@ class RunLog {
   void WriteSummary(const Summary& summary);
   /// Flushes everything.
   void Flush();
+  /// Flushes what can still be flushed and never throws (after a failed write, to keep the rest).
+  void FlushQuietly() noexcept;
 
   const std::string& dir() const { return dir_; }
 
  private:
+  // Throws RunLogError for `f` (named `name`) when its error flag is set or `ok` is false.
+  void Check(std::FILE* f, const char* name, bool ok);
+
   std::string dir_;
   std::string method_;
   std::FILE* hops_ = nullptr;

@@ -4,9 +4,12 @@
 #include <tinyxml2.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
-#include <initializer_list>
+#include <limits>
+#include <utility>
 #include <sstream>
 
 #include "ddoc/hopper/hopper_model.h"
@@ -24,66 +27,116 @@ namespace fs = std::filesystem;
   throw ScenarioError(msg.str());
 }
 
-// Reads an optional double attribute; a present but non-numeric value is an error.
-std::optional<double> OptionalDouble(const std::string& file, const tinyxml2::XMLElement* e,
-                                     const char* attr) {
-  const char* text = e->Attribute(attr);
-  if (text == nullptr) return std::nullopt;
-  double value = 0.0;
-  if (e->QueryDoubleAttribute(attr, &value) != tinyxml2::XML_SUCCESS || !std::isfinite(value)) {
-    Fail(file, e->GetLineNum(),
-         "<" + std::string(e->Name()) + "> attribute " + attr + "=\"" + text +
-             "\" is not a finite number");
+using Element = tinyxml2::XMLElement;
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Counts and hop numbers: integers up to this (an int, and more hops than any run).
+constexpr double kMaxCount = 1e9;
+
+// The range of a number attribute; an open end excludes the value.
+struct Range {
+  double lo = -kInf, hi = kInf;
+  bool lo_open = true, hi_open = true;
+  bool Contains(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
   }
-  return value;
+  std::string Text() const {
+    std::ostringstream os;
+    if (hi == kInf) {
+      os << (lo_open ? "> " : ">= ") << lo;
+    } else {
+      os << "in " << (lo_open ? "(" : "[") << lo << ", " << hi << (hi_open ? ")" : "]");
+    }
+    return os.str();
+  }
+};
+const Range kAnyNumber{};
+const Range kPositive{0.0, kInf, true, true};
+const Range kNonNegative{0.0, kInf, false, true};
+Range Closed(double lo, double hi) { return {lo, hi, false, false}; }
+
+// What an attribute holds: a number in `range`, an integer in `range`, or text (a path, a
+// name, a choice: its parser checks it).
+enum class Kind { kNumber, kInteger, kText };
+struct AttributeSpec {
+  const char* name;
+  Kind kind = Kind::kText;
+  Range range = kAnyNumber;
+};
+struct ElementSpec {
+  const char* name;
+  bool repeatable;  // may appear more than once (<push>); the others at most once
+  std::vector<AttributeSpec> attributes;
+};
+AttributeSpec Number(const char* name, Range range = kAnyNumber) {
+  return {name, Kind::kNumber, range};
+}
+AttributeSpec Integer(const char* name, double lo) {
+  return {name, Kind::kInteger, Closed(lo, kMaxCount)};
+}
+AttributeSpec Text(const char* name) { return {name, Kind::kText, kAnyNumber}; }
+
+// THE TABLE: every element of a scenario file and every attribute it may have, with the range
+// of each number. Anything else in a file is an error naming it, its element, file and line.
+// A new attribute is one line here, read in the element's parser below with Get*().
+const std::vector<ElementSpec>& Elements() {
+  const Eigen::Vector4d lo = hopper::InputLowerBound(), hi = hopper::InputUpperBound();
+  static const std::vector<ElementSpec> table = {
+      {"ddoc_scenario", false, {Text("name")}},
+      {"robot", false, {Text("mjcf")}},
+      {"model", false,
+       {Text("mjcf"), Number("M", kPositive), Number("J_body", kPositive),
+        Number("J_leg", kPositive), Number("r0", kPositive), Number("c_d", kNonNegative),
+        Number("beta", kPositive), Number("g", kPositive)}},
+      {"method", false, {Text("name")}},
+      {"duration", false, {Integer("hops", 0), Number("seconds", kNonNegative)}},
+      {"push", true,
+       {Number("time", kNonNegative), Integer("hop", 1), Number("phase", {0.0, 1.0, false, true}),
+        Number("force"), Number("duration", kPositive)}},
+      {"learning", false,
+       {Number("c", kPositive), Number("gamma", {0.0, 1.0, true, true}),
+        Number("epsilon", kPositive), Number("alpha_min", kPositive),
+        Number("max_duration_step", kPositive), Number("regularization", kNonNegative),
+        Number("alpha_initial", {0.0, 1.0, true, false}), Number("cyclic_value", Closed(0, 1)),
+        Text("terminal"), Text("reference"), Text("alpha_after_accept"), Integer("delta_i", 1),
+        Integer("initial_hops", 1), Text("preset")}},
+      {"experiment", false,
+       {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
+      {"gait", false,
+       {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
+        Number("k0_leg", Closed(lo(hopper::kK0leg), hi(hopper::kK0leg)))}},
+  };
+  return table;
 }
 
-// attr="first" or attr="second"; anything else fails naming both.
-std::optional<std::string> OptionalChoice(const std::string& file, const tinyxml2::XMLElement* e,
-                                          const char* attr, const char* first,
-                                          const char* second) {
-  const char* text = e->Attribute(attr);
-  if (text == nullptr) return std::nullopt;
-  const std::string v = text;
-  if (v != first && v != second) {
-    Fail(file, e->GetLineNum(),
-         "<" + std::string(e->Name()) + "> " + attr + "=\"" + v + "\" (expected " + first +
-             " or " + second + ")");
+const ElementSpec* FindElement(const std::string& name) {
+  for (const ElementSpec& spec : Elements()) {
+    if (name == spec.name) return &spec;
   }
-  return v;
+  return nullptr;
 }
 
-// An integer count >= 1.
-std::optional<int> OptionalCount(const std::string& file, const tinyxml2::XMLElement* e,
-                                 const char* attr) {
-  const std::optional<double> value = OptionalDouble(file, e, attr);
-  if (!value) return std::nullopt;
-  if (*value != std::floor(*value) || *value < 1) {
-    Fail(file, e->GetLineNum(),
-         "<" + std::string(e->Name()) + "> " + attr + " must be an integer >= 1");
+const AttributeSpec& FindAttribute(const Element* e, const char* attr) {
+  const ElementSpec* spec = FindElement(e->Name());
+  for (const AttributeSpec& a : spec->attributes) {
+    if (std::string(attr) == a.name) return a;
   }
-  return static_cast<int>(*value);
+  throw std::logic_error(std::string("scenario.cc: <") + e->Name() + "> " + attr +
+                         " is not in the attribute table");
 }
 
-double RequiredDouble(const std::string& file, const tinyxml2::XMLElement* e, const char* attr) {
-  auto value = OptionalDouble(file, e, attr);
-  if (!value) {
-    Fail(file, e->GetLineNum(),
-         "<" + std::string(e->Name()) + "> is missing attribute " + attr);
-  }
-  return *value;
-}
+std::string Where(const Element* e) { return "<" + std::string(e->Name()) + ">"; }
 
-// Every attribute of e must be one of `known`. A removed one is named with where it went.
-void CheckAttributes(const std::string& file, const tinyxml2::XMLElement* e,
-                     std::initializer_list<const char*> known) {
+// Every attribute of e must be in its table row; e has no child elements and no text.
+// A removed attribute is named with where it went.
+void CheckElement(const std::string& file, const Element* e, const ElementSpec& spec) {
   for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a != nullptr; a = a->Next()) {
     const std::string name = a->Name();
     bool ok = false;
     std::string list;
-    for (const char* k : known) {
-      ok = ok || name == k;
-      list += (list.empty() ? "" : ", ") + std::string(k);
+    for (const AttributeSpec& k : spec.attributes) {
+      ok = ok || name == k.name;
+      list += (list.empty() ? "" : ", ") + std::string(k.name);
     }
     if (ok) continue;
     std::string hint;
@@ -94,9 +147,78 @@ void CheckAttributes(const std::string& file, const tinyxml2::XMLElement* e,
       hint = "; " + name + " was removed with the engine rework (docs/experiments.md)";
     }
     Fail(file, e->GetLineNum(),
-         "<" + std::string(e->Name()) + "> has an unknown attribute " + name + " (expected " +
-             list + ")" + hint);
+         Where(e) + " has an unknown attribute " + name + " (expected " + list + ")" + hint);
   }
+  const bool root = std::string(e->Name()) == "ddoc_scenario";  // its children: the elements
+  for (const tinyxml2::XMLNode* n = e->FirstChild(); n != nullptr; n = n->NextSibling()) {
+    if (const Element* child = n->ToElement(); child != nullptr && !root) {
+      Fail(file, child->GetLineNum(),
+           Where(e) + " has a child element <" + child->Name() + ">; " + Where(e) +
+               " takes attributes only");
+    }
+    const tinyxml2::XMLText* text = n->ToText();
+    if (text != nullptr &&
+        std::string(text->Value()).find_first_not_of(" \t\r\n") != std::string::npos) {
+      Fail(file, n->GetLineNum(),
+           Where(e) + " has text \"" + text->Value() + "\"; " + Where(e) + " takes " +
+               (root ? "elements" : "attributes") + " only");
+    }
+  }
+}
+
+// A number attribute of the table, checked against its range. nullopt when absent.
+std::optional<double> GetNumber(const std::string& file, const Element* e, const char* attr) {
+  const AttributeSpec& spec = FindAttribute(e, attr);
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return std::nullopt;
+  double value = 0.0;
+  if (!ParseFiniteNumber(text, &value)) {
+    Fail(file, e->GetLineNum(),
+         Where(e) + " attribute " + attr + "=\"" + text + "\" is not a finite number");
+  }
+  if (spec.kind == Kind::kInteger) {
+    const std::string expected = "an integer >= " + std::to_string(static_cast<int>(spec.range.lo)) +
+                                 " and <= " + std::to_string(static_cast<int>(kMaxCount));
+    if (value != std::floor(value)) {
+      Fail(file, e->GetLineNum(),
+           Where(e) + " " + attr + " = " + text + " is not an integer: expected " + expected);
+    }
+    if (!spec.range.Contains(value)) {
+      Fail(file, e->GetLineNum(),
+           Where(e) + " " + attr + " = " + text + " is out of range: expected " + expected);
+    }
+  } else if (!spec.range.Contains(value)) {
+    Fail(file, e->GetLineNum(),
+         Where(e) + " " + attr + " = " + text + " is out of range: expected a value " +
+             spec.range.Text());
+  }
+  return value;
+}
+
+std::optional<int> GetInteger(const std::string& file, const Element* e, const char* attr) {
+  const std::optional<double> value = GetNumber(file, e, attr);
+  if (!value) return std::nullopt;
+  return static_cast<int>(*value);  // in range of int: kMaxCount
+}
+
+double RequiredNumber(const std::string& file, const Element* e, const char* attr) {
+  auto value = GetNumber(file, e, attr);
+  if (!value) Fail(file, e->GetLineNum(), Where(e) + " is missing attribute " + attr);
+  return *value;
+}
+
+// attr="first" or attr="second"; anything else fails naming both.
+std::optional<std::string> GetChoice(const std::string& file, const Element* e, const char* attr,
+                                     const char* first, const char* second) {
+  (void)FindAttribute(e, attr);
+  const char* text = e->Attribute(attr);
+  if (text == nullptr) return std::nullopt;
+  const std::string v = text;
+  if (v != first && v != second) {
+    Fail(file, e->GetLineNum(),
+         Where(e) + " " + attr + "=\"" + v + "\" (expected " + first + " or " + second + ")");
+  }
+  return v;
 }
 
 std::string ResolvePath(const std::string& scenario_file, const char* path) {
@@ -125,94 +247,69 @@ const char* MethodName(Method method) {
 
 namespace {
 
-using Element = tinyxml2::XMLElement;
-
 void ParseModel(const std::string& path, const Element* e, Scenario* s) {
-  CheckAttributes(path, e, {"mjcf", "M", "J_body", "J_leg", "r0", "c_d", "beta", "g"});
   if (const char* mjcf = e->Attribute("mjcf")) s->model_mjcf = ResolvePath(path, mjcf);
   ModelNumbers& n = s->model_numbers;
-  n.mass = OptionalDouble(path, e, "M");
-  n.j_body = OptionalDouble(path, e, "J_body");
-  n.j_leg = OptionalDouble(path, e, "J_leg");
-  n.r0 = OptionalDouble(path, e, "r0");
-  n.drag = OptionalDouble(path, e, "c_d");
-  n.beta = OptionalDouble(path, e, "beta");
-  n.gravity = OptionalDouble(path, e, "g");
-}
-
-void ParseDuration(const std::string& path, const Element* e, Scenario* s) {
-  CheckAttributes(path, e, {"hops", "seconds"});
-  s->hops = 0;
-  if (auto hops = OptionalDouble(path, e, "hops")) {
-    if (*hops != std::floor(*hops)) {
-      Fail(path, e->GetLineNum(), "<duration> hops must be an integer");
-    }
-    s->hops = static_cast<int>(*hops);
-  }
-  s->seconds = OptionalDouble(path, e, "seconds").value_or(0.0);
+  n.mass = GetNumber(path, e, "M");
+  n.j_body = GetNumber(path, e, "J_body");
+  n.j_leg = GetNumber(path, e, "J_leg");
+  n.r0 = GetNumber(path, e, "r0");
+  n.drag = GetNumber(path, e, "c_d");
+  n.beta = GetNumber(path, e, "beta");
+  n.gravity = GetNumber(path, e, "g");
 }
 
 void ParseLearning(const std::string& path, const Element* e, LearningOverrides* l) {
-  CheckAttributes(path, e,
-                  {"c", "gamma", "epsilon", "alpha_min", "max_duration_step", "regularization",
-                   "alpha_initial", "cyclic_value", "terminal", "reference",
-                   "alpha_after_accept", "delta_i", "initial_hops", "preset"});
-  if (auto v = OptionalChoice(path, e, "preset", "default", "paper")) l->paper = *v == "paper";
-  l->c = OptionalDouble(path, e, "c");
-  l->gamma = OptionalDouble(path, e, "gamma");
-  l->epsilon = OptionalDouble(path, e, "epsilon");
-  l->alpha_min = OptionalDouble(path, e, "alpha_min");
-  l->max_duration_step = OptionalDouble(path, e, "max_duration_step");
-  l->regularization = OptionalDouble(path, e, "regularization");
-  l->alpha_initial = OptionalDouble(path, e, "alpha_initial");
-  l->cyclic_value = OptionalDouble(path, e, "cyclic_value");
-  if (auto v = OptionalChoice(path, e, "terminal", "time", "event")) {
+  if (auto v = GetChoice(path, e, "preset", "default", "paper")) l->paper = *v == "paper";
+  l->c = GetNumber(path, e, "c");
+  l->gamma = GetNumber(path, e, "gamma");
+  l->epsilon = GetNumber(path, e, "epsilon");
+  l->alpha_min = GetNumber(path, e, "alpha_min");
+  l->max_duration_step = GetNumber(path, e, "max_duration_step");
+  l->regularization = GetNumber(path, e, "regularization");
+  l->alpha_initial = GetNumber(path, e, "alpha_initial");
+  l->cyclic_value = GetNumber(path, e, "cyclic_value");
+  if (auto v = GetChoice(path, e, "terminal", "time", "event")) {
     l->terminal_event = *v == "event";
   }
-  if (auto v = OptionalChoice(path, e, "reference", "own", "gait")) {
+  if (auto v = GetChoice(path, e, "reference", "own", "gait")) {
     l->anchor_reference = *v == "gait";
   }
-  if (auto v = OptionalChoice(path, e, "alpha_after_accept", "reset", "grow")) {
+  if (auto v = GetChoice(path, e, "alpha_after_accept", "reset", "grow")) {
     l->reset_alpha_on_accept = *v == "reset";
   }
-  l->delta_i = OptionalCount(path, e, "delta_i");
-  l->initial_hops = OptionalCount(path, e, "initial_hops");
+  l->delta_i = GetInteger(path, e, "delta_i");
+  l->initial_hops = GetInteger(path, e, "initial_hops");
 }
 
 // <push time=.../> or <push hop=... phase=.../>, with force and duration.
 void ParsePushElement(const std::string& path, const Element* e, Scenario* s) {
-  CheckAttributes(path, e, {"time", "hop", "phase", "force", "duration"});
   const bool by_time = e->Attribute("time") != nullptr;
   if (by_time == (e->Attribute("hop") != nullptr || e->Attribute("phase") != nullptr)) {
     Fail(path, e->GetLineNum(), "<push> needs either time or hop and phase");
   }
-  const double force = RequiredDouble(path, e, "force");
-  const double duration = RequiredDouble(path, e, "duration");
+  const double force = RequiredNumber(path, e, "force");
+  const double duration = RequiredNumber(path, e, "duration");
   if (by_time) {
-    s->pushes.push_back({RequiredDouble(path, e, "time"), force, duration});
+    s->pushes.push_back({RequiredNumber(path, e, "time"), force, duration});
     return;
   }
-  const double hop = RequiredDouble(path, e, "hop");
-  if (hop != std::floor(hop) || hop < 1 || hop > 1e9) {
-    Fail(path, e->GetLineNum(), "<push> hop must be an integer >= 1");
-  }
-  s->hop_pushes.push_back({static_cast<int>(hop), RequiredDouble(path, e, "phase"), force,
-                           duration});
+  const std::optional<int> hop = GetInteger(path, e, "hop");
+  if (!hop) Fail(path, e->GetLineNum(), "<push> is missing attribute hop");
+  s->hop_pushes.push_back({*hop, RequiredNumber(path, e, "phase"), force, duration});
 }
 
-// One child element of <ddoc_scenario>.
-void ParseElement(const std::string& path, const Element* e, Scenario* s) {
+// One child element of <ddoc_scenario>, already checked against the table.
+void ParseElement(void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   const std::string tag = e->Name();
   const int line = e->GetLineNum();
   if (tag == "robot") {
-    CheckAttributes(path, e, {"mjcf"});
     const char* mjcf = e->Attribute("mjcf");
     if (mjcf == nullptr) Fail(path, line, "<robot> is missing attribute mjcf");
     s->robot_mjcf = ResolvePath(path, mjcf);
   } else if (tag == "model") {
     ParseModel(path, e, s);
   } else if (tag == "method") {
-    CheckAttributes(path, e, {"name"});
     const char* name = e->Attribute("name");
     if (name == nullptr) Fail(path, line, "<method> is missing attribute name");
     try {
@@ -221,23 +318,44 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
       Fail(path, line, err.what());
     }
   } else if (tag == "duration") {
-    ParseDuration(path, e, s);
+    s->hops = GetInteger(path, e, "hops").value_or(0);
+    s->seconds = GetNumber(path, e, "seconds").value_or(0.0);
   } else if (tag == "push") {
     ParsePushElement(path, e, s);
   } else if (tag == "learning") {
     ParseLearning(path, e, &s->learning);
   } else if (tag == "experiment") {
-    CheckAttributes(path, e, {"flight_pitch_feedback", "from_hop"});
-    s->experiment.flight_pitch_feedback = OptionalDouble(path, e, "flight_pitch_feedback");
-    s->experiment.from_hop = OptionalCount(path, e, "from_hop");
+    s->experiment.flight_pitch_feedback = GetNumber(path, e, "flight_pitch_feedback");
+    s->experiment.from_hop = GetInteger(path, e, "from_hop");
   } else if (tag == "gait") {
-    CheckAttributes(path, e, {"speed", "k0_hip", "k0_leg"});
-    s->forward_speed = OptionalDouble(path, e, "speed").value_or(0.0);
-    s->gait_k0_hip = OptionalDouble(path, e, "k0_hip");
-    s->gait_k0_leg = OptionalDouble(path, e, "k0_leg");
-  } else {
-    Fail(path, line, "unknown element <" + tag + "> (expected robot, model, method, "
-                     "duration, push, learning, experiment or gait)");
+    s->forward_speed = GetNumber(path, e, "speed").value_or(0.0);
+    s->gait_k0_hip = GetNumber(path, e, "k0_hip");
+    s->gait_k0_leg = GetNumber(path, e, "k0_leg");
+  }
+}
+
+// The children of <ddoc_scenario>: known elements (the table), each checked, the singletons at
+// most once; then parsed.
+void ParseChildren(const std::string& path, const Element* root, Scenario* s) {
+  std::vector<std::pair<std::string, int>> seen;  // element, line of its first appearance
+  for (const Element* e = root->FirstChildElement(); e != nullptr; e = e->NextSiblingElement()) {
+    const std::string tag = e->Name();
+    const ElementSpec* spec = tag == "ddoc_scenario" ? nullptr : FindElement(tag);
+    if (spec == nullptr) {
+      Fail(path, e->GetLineNum(),
+           "unknown element <" + tag + "> (expected robot, model, method, duration, push, "
+           "learning, experiment or gait)");
+    }
+    for (const auto& [name, line] : seen) {
+      if (name == tag && !spec->repeatable) {
+        Fail(path, e->GetLineNum(),
+             "<" + tag + "> is given twice (first at line " + std::to_string(line) +
+                 "); give it once");
+      }
+    }
+    seen.emplace_back(tag, e->GetLineNum());
+    CheckElement(path, e, *spec);
+    ParseElement(path, e, s);
   }
 }
 
@@ -253,13 +371,11 @@ Scenario LoadScenario(const std::string& path) {
   if (root == nullptr || std::string(root->Name()) != "ddoc_scenario") {
     Fail(path, root ? root->GetLineNum() : 0, "the root element must be <ddoc_scenario>");
   }
-  CheckAttributes(path, root, {"name"});
+  CheckElement(path, root, *FindElement("ddoc_scenario"));
   Scenario s;
   s.file = path;
   s.name = root->Attribute("name") ? root->Attribute("name") : fs::path(path).stem().string();
-  for (const Element* e = root->FirstChildElement(); e != nullptr; e = e->NextSiblingElement()) {
-    ParseElement(path, e, &s);
-  }
+  ParseChildren(path, root, &s);
   std::sort(s.pushes.begin(), s.pushes.end(),
             [](const Push& a, const Push& b) { return a.time < b.time; });
   std::stable_sort(s.hop_pushes.begin(), s.hop_pushes.end(), [](const HopPush& a, const HopPush& b) {
@@ -270,6 +386,8 @@ Scenario LoadScenario(const std::string& path) {
 }
 
 void ValidateScenario(const Scenario& s) {
+  // What the command line can change (the files, hops, seconds, pushes); the ranges of the other
+  // fields are checked where the file gives them (the attribute table), naming the line.
   const std::string& f = s.file;
   if (s.robot_mjcf.empty()) Fail(f, 0, "no robot MJCF given (<robot mjcf=...>)");
   if (!fs::is_regular_file(s.robot_mjcf)) {
@@ -279,53 +397,16 @@ void ValidateScenario(const Scenario& s) {
     Fail(f, 0, "model MJCF \"" + s.model_mjcf + "\" does not exist");
   }
   if (s.hops < 0) Fail(f, 0, "hops must be >= 0, got " + std::to_string(s.hops));
-  if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) Fail(f, 0, "seconds must be >= 0");
+  if (!(s.seconds >= 0.0) || !std::isfinite(s.seconds)) {
+    Fail(f, 0, "seconds must be a finite number >= 0");
+  }
   if (s.hops == 0 && s.seconds == 0.0) Fail(f, 0, "give a number of hops or of seconds");
-  auto positive = [&](const std::optional<double>& v, const char* name) {
-    if (v && !(*v > 0.0)) Fail(f, 0, std::string(name) + " must be > 0");
-  };
-  positive(s.model_numbers.mass, "model M");
-  positive(s.model_numbers.j_body, "model J_body");
-  positive(s.model_numbers.j_leg, "model J_leg");
-  positive(s.model_numbers.r0, "model r0");
-  positive(s.model_numbers.beta, "model beta");
-  positive(s.model_numbers.gravity, "model g");
-  if (s.model_numbers.drag && *s.model_numbers.drag < 0.0) Fail(f, 0, "model c_d must be >= 0");
-  const LearningOverrides& l = s.learning;
-  positive(l.c, "learning c");
-  positive(l.epsilon, "learning epsilon");
-  positive(l.alpha_min, "learning alpha_min");
-  positive(l.max_duration_step, "learning max_duration_step");
-  if (l.regularization && *l.regularization < 0.0) {
-    Fail(f, 0, "learning regularization must be >= 0");
-  }
-  if (l.gamma && !(*l.gamma > 0.0 && *l.gamma < 1.0)) {
-    Fail(f, 0, "learning gamma must be in (0, 1)");
-  }
-  const std::optional<double>& pitch = s.experiment.flight_pitch_feedback;
-  if (pitch && !(*pitch >= 0.0 && *pitch <= 1.0)) {
-    Fail(f, 0, "experiment flight_pitch_feedback must be in [0, 1]");
-  }
-  if (l.alpha_initial && !(*l.alpha_initial > 0.0 && *l.alpha_initial <= 1.0)) {
-    Fail(f, 0, "learning alpha_initial must be in (0, 1]");
-  }
-  if (l.cyclic_value && !(*l.cyclic_value >= 0.0 && *l.cyclic_value <= 1.0)) {
-    Fail(f, 0, "learning cyclic_value must be in [0, 1]");
-  }
-  auto in_bounds = [&](const std::optional<double>& v, const char* name, double lo, double hi) {
-    if (v && !(*v >= lo && *v <= hi)) {
-      std::ostringstream msg;
-      msg << "gait " << name << " = " << *v << " is outside the input bounds [" << lo << ", " << hi
-          << "]";
-      Fail(f, 0, msg.str());
-    }
-  };
-  const Eigen::Vector4d lo = hopper::InputLowerBound(), hi = hopper::InputUpperBound();
-  in_bounds(s.gait_k0_hip, "k0_hip", lo(hopper::kK0hip), hi(hopper::kK0hip));
-  in_bounds(s.gait_k0_leg, "k0_leg", lo(hopper::kK0leg), hi(hopper::kK0leg));
   for (const Push& p : s.pushes) {
-    if (!(p.time >= 0.0)) Fail(f, 0, "push time must be >= 0");
-    if (!(p.duration > 0.0)) Fail(f, 0, "push duration must be > 0");
+    if (!(p.time >= 0.0) || !std::isfinite(p.time)) Fail(f, 0, "push time must be >= 0");
+    if (!(p.duration > 0.0) || !std::isfinite(p.duration)) {
+      Fail(f, 0, "push duration must be > 0");
+    }
+    if (!std::isfinite(p.force)) Fail(f, 0, "push force must be a finite number");
   }
   for (const HopPush& p : s.hop_pushes) {
     if (p.hop < 1) Fail(f, 0, "push hop must be >= 1 (hop 0 has no previous hop)");
@@ -334,15 +415,54 @@ void ValidateScenario(const Scenario& s) {
   }
 }
 
-Push ParsePush(const std::string& text) {
-  Push p;
-  char c1 = 0, c2 = 0;
-  std::istringstream in(text);
-  if (!(in >> p.time >> c1 >> p.force >> c2 >> p.duration) || c1 != ',' || c2 != ',' ||
-      !in.eof() && (in >> std::ws, !in.eof())) {
-    throw ScenarioError("--push \"" + text + "\": expected TIME,FORCE,DURATION");
+bool ParseFiniteNumber(const std::string& text, double* value) {
+  // Digits, sign, point and exponent only: no "nan", "inf", hex, or trailing characters.
+  const size_t begin = text.find_first_not_of(" \t\n\r");
+  if (begin == std::string::npos) return false;
+  const size_t end = text.find_last_not_of(" \t\n\r") + 1;
+  const std::string number = text.substr(begin, end - begin);
+  if (number.find_first_not_of("0123456789+-.eE") != std::string::npos) return false;
+  char* stop = nullptr;
+  errno = 0;
+  const double v = std::strtod(number.c_str(), &stop);
+  if (stop != number.c_str() + number.size() || errno == ERANGE || !std::isfinite(v)) {
+    return false;
   }
-  if (!(p.time >= 0.0) || !(p.duration > 0.0) || !std::isfinite(p.force)) {
+  *value = v;
+  return true;
+}
+
+std::vector<double> ParseNumberList(const std::string& text, size_t n, const char* option) {
+  std::vector<double> v;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? comma : comma - start);
+    double value = 0.0;
+    if (!ParseFiniteNumber(item, &value)) {
+      throw ScenarioError(std::string(option) + ": '" + item + "' is not a finite number");
+    }
+    v.push_back(value);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (v.size() != n) {
+    throw ScenarioError(std::string(option) + ": got " + std::to_string(v.size()) +
+                        " values, expected " + std::to_string(n));
+  }
+  return v;
+}
+
+Push ParsePush(const std::string& text) {
+  std::vector<double> v;
+  try {
+    v = ParseNumberList(text, 3, "--push");
+  } catch (const ScenarioError& e) {
+    const std::string why = std::string(e.what()).substr(std::string("--push: ").size());
+    throw ScenarioError("--push \"" + text + "\": " + why + "; expected TIME,FORCE,DURATION");
+  }
+  const Push p{v[0], v[1], v[2]};
+  if (!(p.time >= 0.0) || !(p.duration > 0.0)) {
     throw ScenarioError("--push \"" + text + "\": time must be >= 0 and duration > 0");
   }
   return p;

@@ -107,6 +107,13 @@ Push ParsePush(const std::string& text);
 /// Parses "HOP@PHASE,FORCE,DURATION" (ddoc-hopper's --push by hop phase). Throws ScenarioError.
 HopPush ParseHopPush(const std::string& text);
 
+/// Parses "a,b,c" into exactly n finite numbers (ddoc-drop's --state and --u). Throws
+/// ScenarioError naming `option` and the bad item or the count.
+std::vector<double> ParseNumberList(const std::string& text, size_t n, const char* option);
+
+/// Parses a whole string as one finite number (no trailing characters, no nan/inf); false if not.
+bool ParseFiniteNumber(const std::string& text, double* value);
+
 }  // namespace ddoc::app
 
 #endif  // DDOC_APP_SCENARIO_H_

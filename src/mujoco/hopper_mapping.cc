@@ -147,6 +147,20 @@ HopperMapping HopperMapping::Build(const mjModel* m, const std::string& source,
       }
     }
   }
+  // A <numeric> the hopper does not read is a typo (drag_c for drag_cd would silently mean no
+  // drag): an error naming it.
+  for (int i = 0; i < m->nnumeric; ++i) {
+    const char* name = mj_id2name(m, mjOBJ_NUMERIC, i);
+    const std::string s = name != nullptr ? name : "";
+    if (s != n.drag && s != n.beta) {
+      Fail(source, "unknown <numeric name='" + s + "'> (the hopper reads '" + n.drag + "' and '" +
+                       n.beta + "')");
+    }
+    if (m->numeric_size[i] != 1) {
+      Fail(source, "<numeric name='" + s + "'> has " + std::to_string(m->numeric_size[i]) +
+                       " values, expected 1");
+    }
+  }
   map.drag_cd = Numeric(m, n.drag, 0.0, source);
   if (map.drag_cd < 0.0) Fail(source, "<numeric name='drag_cd'> must be >= 0");
   map.beta = Numeric(m, n.beta, kDefaultVsaBeta, source);

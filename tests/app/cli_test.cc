@@ -82,6 +82,9 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
   const std::string good = Scenario("default.xml");
   std::ofstream(dir_ / "broken.xml") << "<ddoc_scenario><robot mjcf='x.xml'>";
   std::ofstream(dir_ / "bad_robot.xml") << "<mujoco><worldbody/></mujoco>";
+  std::ofstream(dir_ / "typo.xml") << "<ddoc_scenario>\n<robot mjcf='" << DDOC_MODELS_DIR
+                                   << "/hopper_m8.xml'/>\n<learning cyclic='0.99'/>\n"
+                                   << "</ddoc_scenario>\n";
   const Case cases[] = {
       {"", "scenario is required"},
       {Out("missing.xml"), "does not exist"},
@@ -94,6 +97,15 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --robot " + Out("bad_robot.xml"), "bad_robot.xml"},
       {good + " --robot " + Out("nope.xml"), "nope.xml"},
       {good + " --out /proc/ddoc_no/out", "/proc/ddoc_no/out"},
+      // Issue 20: a typo in an attribute stops the run before it starts, naming it.
+      {Out("typo.xml"), "typo.xml:3: <learning> has an unknown attribute cyclic"},
+      {good + " --push nan,1,1", "--push \"nan,1,1\""},
+      {good + " --push 1,2,0.1x", "TIME,FORCE,DURATION"},
+      {good + " --seconds inf --hops 0", "--seconds must be a finite number >= 0"},
+      {good + " --seconds nan --hops 0", "--seconds must be a finite number >= 0"},
+      {good + " --hops 1e12", "--hops"},
+      {good + " --log-every 0", "--log-every must be >= 1"},
+      {good + " --offline-latency -1", "offline_latency"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);

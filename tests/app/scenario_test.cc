@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "run_log.h"
 
@@ -172,15 +173,87 @@ TEST_F(ScenarioTest, BadInputNamesTheProblem) {
               {"ppo", "alg1"});
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><model M='ten'/></ddoc_scenario>",
               {":1", "<model>", "M=\"ten\""});
-  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><model M='-1'/></ddoc_scenario>", {"M must be > 0"});
+  ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><model M='-1'/></ddoc_scenario>",
+              {"s.xml:1", "<model>", "M = -1", "out of range", "> 0"});
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><push time='1' force='2'/></ddoc_scenario>",
               {"<push>", "duration"});
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><push time='1' force='2' duration='0'/></ddoc_scenario>",
-              {"push duration must be > 0"});
+              {"s.xml:1", "<push>", "duration = 0", "out of range", "> 0"});
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><duration hops='0'/></ddoc_scenario>",
               {"hops or of seconds"});
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/><wind/></ddoc_scenario>", {"<wind>"});
   EXPECT_THROW(LoadScenario((dir_ / "missing.xml").string()), ScenarioError);
+}
+
+// Issue 20: a typo in an attribute, a value out of its range, a number with trailing characters,
+// a non-finite or oversized number, a child element, text, or an element given twice is an error
+// naming the file, the line, the element and the attribute; nothing is silently ignored.
+TEST_F(ScenarioTest, StrictFilesNameFileLineElementAndAttribute) {
+  const char* fmt = "<ddoc_scenario>\n<robot mjcf='robot.xml'/>\n<learning %s/>\n</ddoc_scenario>";
+  ExpectError(Fill(fmt, "cyclic='0.99'"),
+              {"s.xml:3", "<learning>", "unknown attribute cyclic", "cyclic_value"});
+  ExpectError(Fill(fmt, "gamma='1'"), {"s.xml:3", "<learning>", "gamma = 1", "in (0, 1)"});
+  ExpectError(Fill(fmt, "c='0'"), {"s.xml:3", "<learning>", "c = 0", "> 0"});
+  ExpectError(Fill(fmt, "regularization='-1'"), {"s.xml:3", "regularization = -1", ">= 0"});
+  ExpectError(Fill(fmt, "delta_i='1e12'"), {"s.xml:3", "delta_i = 1e12", "out of range"});
+  ExpectError(Fill(fmt, "gamma='0.5abc'"), {"s.xml:3", "gamma=\"0.5abc\"", "not a finite number"});
+  ExpectError(Fill(fmt, "gamma='nan'"), {"s.xml:3", "gamma=\"nan\"", "not a finite number"});
+  ExpectError(Fill(fmt, "epsilon='inf'"), {"epsilon=\"inf\"", "not a finite number"});
+  ExpectError(Fill(fmt, "epsilon='1e999'"), {"epsilon=\"1e999\"", "not a finite number"});
+  ExpectError(Fill(fmt, "epsilon='0x10'"), {"epsilon=\"0x10\"", "not a finite number"});
+  ExpectError(Fill(fmt, "epsilon=''"), {"epsilon=\"\"", "not a finite number"});
+  const char* body = "<ddoc_scenario>\n<robot mjcf='robot.xml'/>\n%s\n</ddoc_scenario>";
+  ExpectError(Fill(body, "<duration hops='1e12'/>"), {"s.xml:3", "<duration>", "hops = 1e12"});
+  ExpectError(Fill(body, "<duration hops='2.5'/>"), {"s.xml:3", "hops = 2.5", "not an integer"});
+  ExpectError(Fill(body, "<duration seconds='-1'/>"), {"s.xml:3", "seconds = -1", ">= 0"});
+  ExpectError(Fill(body, "<gait speed='0.5' k0_hip='151'/>"),
+              {"s.xml:3", "<gait>", "k0_hip = 151", "[10, 150]"});
+  ExpectError(Fill(body, "<model beta='0'/>"), {"s.xml:3", "<model>", "beta = 0", "> 0"});
+  ExpectError(Fill(body, "<model c_d='-0.1'/>"), {"s.xml:3", "c_d = -0.1", ">= 0"});
+  ExpectError(Fill(body, "<push time='-1' force='1' duration='1'/>"),
+              {"s.xml:3", "<push>", "time = -1", ">= 0"});
+  ExpectError(Fill(body, "<push time='1' force='huge' duration='1'/>"),
+              {"s.xml:3", "<push>", "force=\"huge\""});
+  ExpectError(Fill(body, "<experiment from_hop='0'/>"), {"s.xml:3", "from_hop = 0", ">= 1"});
+  ExpectError(Fill(body, "<learning>\n<gamma>0.5</gamma>\n</learning>"),
+              {"s.xml:4", "<learning> has a child element <gamma>", "attributes only"});
+  ExpectError(Fill(body, "<learning>gamma=0.5</learning>"),
+              {"s.xml:3", "<learning> has text \"gamma=0.5\""});
+  ExpectError(Fill(body, "stray text"), {"s.xml:", "<ddoc_scenario> has text \"", "stray text"});
+  ExpectError(Fill(body, "<learning gamma='0.5'/>\n<learning c='1'/>"),
+              {"s.xml:4", "<learning> is given twice (first at line 3)"});
+  ExpectError(Fill(body, "<robot mjcf='robot.xml'/>"), {"s.xml:3", "<robot> is given twice"});
+  ExpectError(Fill(body, "<ddoc_scenario/>"), {"s.xml:3", "unknown element <ddoc_scenario>"});
+  ExpectError("<ddoc_scenario nmae='x'><robot mjcf='robot.xml'/></ddoc_scenario>",
+              {"s.xml:1", "<ddoc_scenario>", "unknown attribute nmae", "name"});
+  // Pushes repeat; comments and whitespace are fine.
+  const Scenario s = LoadScenario(Write(Fill(
+      body, "<!-- two pushes -->\n<push time='1' force='2' duration='0.1'/>\n"
+            "<push time='2' force='-2' duration='0.1'/>\n<duration hops='3'/>")));
+  EXPECT_EQ(s.pushes.size(), 2u);
+  EXPECT_EQ(s.hops, 3);
+}
+
+TEST(ParseNumberListTest, ExactlyNFiniteNumbers) {
+  const std::vector<double> v = ParseNumberList("1, -2.5,3e2 ", 3, "--u");
+  ASSERT_EQ(v.size(), 3u);
+  EXPECT_DOUBLE_EQ(v[1], -2.5);
+  EXPECT_DOUBLE_EQ(v[2], 300.0);
+  auto expect_error = [](const std::string& text, const std::string& needle) {
+    try {
+      ParseNumberList(text, 3, "--u");
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const ScenarioError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  expect_error("1,2", "--u: got 2 values, expected 3");
+  expect_error("1,2,3,4", "got 4 values");
+  expect_error("1,nan,3", "--u: 'nan' is not a finite number");
+  expect_error("1,inf,3", "'inf'");
+  expect_error("1,2x,3", "'2x'");
+  expect_error("1,,3", "'' is not a finite number");
+  expect_error("1,2,1e400", "'1e400'");
 }
 
 TEST(ParsePushTest, AcceptsTripletsOnly) {
@@ -192,6 +265,10 @@ TEST(ParsePushTest, AcceptsTripletsOnly) {
   EXPECT_THROW(ParsePush("2.5;-20;0.2"), ScenarioError);
   EXPECT_THROW(ParsePush("1,2,0"), ScenarioError);
   EXPECT_THROW(ParsePush("1,2,3,4"), ScenarioError);
+  EXPECT_THROW(ParsePush("nan,1,1"), ScenarioError);
+  EXPECT_THROW(ParsePush("1,inf,1"), ScenarioError);
+  EXPECT_THROW(ParsePush("1,1,1e999"), ScenarioError);
+  EXPECT_THROW(ParsePush("1,1,1junk"), ScenarioError);
 }
 
 TEST_F(ScenarioTest, PushByHopPhase) {

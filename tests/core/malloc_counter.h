@@ -1,7 +1,8 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
 // Counts heap allocations (malloc/calloc/realloc/new) of the whole test process by
-// interposing glibc's malloc family (Drake LimitMalloc-style).
+// interposing glibc's malloc family (Drake LimitMalloc-style); under AddressSanitizer, through
+// the sanitizer's allocation hook instead.
 #ifndef DDOC_TESTS_CORE_MALLOC_COUNTER_H_
 #define DDOC_TESTS_CORE_MALLOC_COUNTER_H_
 

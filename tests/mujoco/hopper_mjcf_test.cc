@@ -97,6 +97,18 @@ TEST(HopperMjcfTest, MissingNamesAreReported) {
                        "hopper.xml", {"hopper.xml", "hip_motor", "gear -1"});
 }
 
+// Issue 20: a typo in a <numeric> name or an attribute is an error naming it, not a default.
+TEST(HopperMjcfTest, UnknownNumericsAndAttributesAreNamed) {
+  ExpectErrorAfterEdit("hopper_m8.xml", "name=\"drag_cd\"", "name=\"drag_c\"", "hopper_m8.xml",
+                       {"hopper_m8.xml", "unknown <numeric name='drag_c'>", "drag_cd"});
+  ExpectErrorAfterEdit("hopper.xml", "<numeric name=\"vsa_beta\" data=\"20\"/>",
+                       "<numeric name=\"vsa_beta\" data=\"20 30\"/>", "hopper.xml",
+                       {"hopper.xml", "vsa_beta", "2 values, expected 1"});
+  // MuJoCo's own schema check names an unknown attribute.
+  ExpectErrorAfterEdit("hopper_m8.xml", "<inertial pos=", "<inertial poss=", "hopper_m8.xml",
+                       {"hopper_m8.xml", "poss"});
+}
+
 TEST(HopperMjcfTest, NonPositiveMassOrInertiaNamesFileLineAndBody) {
   ExpectErrorAfterEdit("hopper_m8.xml", "mass=\"8\"", "mass=\"0\"",
                        "hopper_m8.xml", {"hopper_m8.xml", "line", "body 'torso'", "mass = 0"});
