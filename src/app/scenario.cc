@@ -300,7 +300,7 @@ void ParsePushElement(const std::string& path, const Element* e, Scenario* s) {
 }
 
 // One child element of <ddoc_scenario>, already checked against the table.
-void ParseElement(void ParseElement(const std::string& path, const Element* e, Scenario* s) {
+void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   const std::string tag = e->Name();
   const int line = e->GetLineNum();
   if (tag == "robot") {
