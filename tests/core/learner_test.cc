@@ -160,16 +160,23 @@ TEST(Learner, AllThreeMethodsAgreeWithAnExactModel) {
   EXPECT_LT((c.r_mrl.T - c.r_alg1.T).norm(), 1e-6);
 }
 
+// c so large that no trial can decrease the cost enough: every trial is rejected; alpha halves
+// (1, 1/2, 1/4, 1/8) and falls below alpha_min = 0.1 at the fourth rejection.
+LearnerSettings RejectEveryTrial() {
+  LearnerSettings s = LqTestSettings();
+  s.c = 1e6;
+  s.gamma = 0.5;
+  s.interpolate_backtracking = false;
+  s.alpha_min = 0.1;
+  return s;
+}
+
 TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   TwoModeLq lq;
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = LqTestSettings();
-  settings.c = 1e6;  // nothing can decrease the cost this much: every trial is rejected
-  settings.gamma = 0.5;
-  settings.interpolate_backtracking = false;
-  settings.alpha_min = 0.1;
+  LearnerSettings settings = RejectEveryTrial();
   Learner learner(p.problem, settings);
   Trajectory measured;
   plant.Run(lq.x0, initial, &measured);
@@ -354,11 +361,8 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   LqProblem p(lq);
   ModelPlant plant(p.problem);
   FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = LqTestSettings();
-  settings.c = 1e6;  // every trial is rejected
+  LearnerSettings settings = RejectEveryTrial();
   settings.acceptance = Acceptance::kSufficientDecrease;
-  settings.interpolate_backtracking = false;
-  settings.alpha_min = 0.1;
   settings.restart_on_failure = true;
   Learner learner(p.problem, settings);
   Trajectory measured;
