@@ -147,6 +147,13 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
               {"<learning>", "terminal=\"takeoff\"", "time or event"});
   ExpectError(Fill(fmt, "initial_hops='0'"), {"initial_hops", ">= 1"});
   ExpectError(Fill(fmt, "initial_hops='1.5'"), {"initial_hops", "integer"});
+  // preset="paper": Algorithm 1 as printed (ControllerConfigFor); "default" or absent: not.
+  EXPECT_FALSE(s.learning.paper);
+  s = LoadScenario(Write(Fill(fmt, "preset='paper'")));
+  EXPECT_TRUE(s.learning.paper);
+  s = LoadScenario(Write(Fill(fmt, "preset='default'")));
+  EXPECT_FALSE(s.learning.paper);
+  ExpectError(Fill(fmt, "preset='papr'"), {"<learning>", "preset=\"papr\"", "default or paper"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {
