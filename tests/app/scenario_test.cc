@@ -298,15 +298,15 @@ TEST_F(ScenarioTest, PushByHopPhase) {
   ExpectError(Fill(fmt, "<push hop='3' force='2' duration='0.1'/>"), {"<push>", "phase"});
   ExpectError(Fill(fmt, "<push phase='0.5' force='2' duration='0.1'/>"), {"<push>", "hop"});
   ExpectError(Fill(fmt, "<push hop='0' phase='0' force='2' duration='0.1'/>"),
-              {"hop must be an integer >= 1"});
+              {"<push> hop = 0 is out of range", "an integer >= 1"});
   ExpectError(Fill(fmt, "<push hop='2.5' phase='0' force='2' duration='0.1'/>"),
-              {"hop must be an integer >= 1"});
+              {"<push> hop = 2.5 is not an integer"});
   ExpectError(Fill(fmt, "<push hop='3' phase='1' force='2' duration='0.1'/>"),
-              {"phase must be in [0, 1)"});
+              {"<push> phase = 1 is out of range", "[0, 1)"});
   ExpectError(Fill(fmt, "<push hop='3' phase='-0.1' force='2' duration='0.1'/>"),
-              {"phase must be in [0, 1)"});
+              {"<push> phase = -0.1 is out of range", "[0, 1)"});
   ExpectError(Fill(fmt, "<push hop='3' phase='0.5' force='2' duration='0'/>"),
-              {"push duration must be > 0"});
+              {"<push> duration = 0 is out of range", "> 0"});
 }
 
 TEST(ParsePushTest, ByHopPhase) {
