@@ -168,7 +168,8 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
 
 }  // namespace
 
-LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides) {
+LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides,
+                  bool start_controller) {
   LoadedRun run;
   HopperParams params;
   try {
@@ -182,15 +183,19 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   run.config = ControllerConfigFor(run.scenario, params);
   if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
   run.data.reset(mj_makeData(run.model.get()));
+  if (start_controller) StartController(&run);
+  return run;
+}
+
+void StartController(LoadedRun* run) {
   std::string error;
-  run.controller = plugin::HopperController::Create(run.model.get(), run.config, &error);
-  if (!run.controller) {
+  run->controller = plugin::HopperController::Create(run->model.get(), run->config, &error);
+  if (!run->controller) {
     // A bad --offline-latency is bad input; anything else failed inside the controller.
     const bool input = error.find("offline_latency") != std::string::npos;
     throw RunError(input ? kExitBadInput : kExitError, error);
   }
-  run.controller->Reset(run.model.get(), run.data.get());
-  return run;
+  run->controller->Reset(run->model.get(), run->data.get());
 }
 
 RunStepper::RunStepper(LoadedRun* run)

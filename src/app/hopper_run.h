@@ -92,10 +92,14 @@ struct LoadedRun {
 };
 
 /// The load-a-run step: the scenario with the overrides, validated; the robot MJCF; the model's
-/// parameters; the controller (Create + Reset). Throws RunError: kExitBadInput for bad input
-/// (the message names the file, flag or element), kExitError when the controller cannot be
-/// created.
-LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides);
+/// parameters; then (StartController) the controller (Create + Reset). Throws RunError:
+/// kExitBadInput for bad input (the message names the file, flag or element), kExitError when the
+/// controller cannot be created. Without `start_controller` the controller is left empty, so that
+/// the caller can check its own settings before the controller's start (which derives u^0 on the
+/// model, seconds of work) and call StartController then.
+LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& overrides,
+                  bool start_controller = true);
+void StartController(LoadedRun* run);
 
 /// What one step of a run ended with.
 struct StepOutcome {

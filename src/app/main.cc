@@ -365,7 +365,9 @@ int Run(int argc, char** argv) {
   Options o;
   const int parsed = ParseOptions(argc, argv, &o);
   if (parsed >= 0) return parsed;
-  LoadedRun run = LoadRun(o.scenario, o.run);  // RunError: RunTool prints it
+  // RunError: RunTool prints it. The controller starts after the frames and the log: bad render
+  // settings and an unwritable --out fail at once, not after u^0 is derived.
+  LoadedRun run = LoadRun(o.scenario, o.run, /*start_controller=*/false);
   if (o.out.empty()) o.out = "out/" + run.scenario.name;
   if (!o.video.empty() && o.render_dir.empty()) o.render_dir = o.out + "/frames";
   Frames frames(o, run.model.get(), MethodName(run.scenario.method));
@@ -375,6 +377,7 @@ int Run(int argc, char** argv) {
   } catch (const std::exception& e) {
     throw RunError(kExitBadInput, e.what());
   }
+  StartController(&run);
   std::unique_ptr<HopperRun> hopper;
   try {
     hopper = std::make_unique<HopperRun>(o, &run, log.get(), &frames);  // writes summary.json

@@ -4,8 +4,9 @@
 // huge, random), at every phase of a hop and in both modes of the offline part (host: RunOffline
 // between steps; worker: a thread), every control Compute writes to mjData is finite, every
 // actuator with a ctrlrange gets a ctrl inside it, and the input u is finite and inside its box.
-// Fixed seed; the phases are found on a reference run, then each is reached on a fresh robot
-// (the runs are deterministic) and hit with random states.
+// Fixed seed; the phases are found on a reference run, then each is reached again after a Reset
+// of the same controller (the runs are deterministic) and hit with random states. Reset must
+// clear what the random states did: the reference run is repeated exactly at the end.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,6 +31,7 @@ struct Phase {
   int mode;             // hopper::kFlight / kStance
   bool initial_law;     // u^0 (warm-up, or the latency after a hop) or a learned law
   bool offline_pending; // a hop waits for the offline part (host mode, right after a takeoff)
+  bool operator==(const Phase& o) const { return !(*this < o) && !(o < *this); }
   bool operator<(const Phase& o) const {
     return std::tie(warmup, mode, initial_law, offline_pending) <
            std::tie(o.warmup, o.mode, o.initial_law, o.offline_pending);
@@ -51,15 +53,16 @@ ControllerConfig Config(bool worker) {
 
 Host HostOf(bool worker) { return worker ? Host::kWaitsForWorker : Host::kRunsOffline; }
 
-constexpr int kHops = 6;  // 3 warm-up hops (HopperTrialSettings) and 3 learning hops
+// The warm-up hops (HopperTrialSettings) and two learning hops: the second learning hop is the
+// first that runs a law learned from a learning hop.
+int Hops(Robot& rig) { return rig.c().config().driver.warmup_trials + 2; }
 
-// The reference run: the phase after each step, until kHops hops are complete.
-std::vector<Phase> PhasesOfAReferenceRun(bool worker) {
-  Robot rig("hopper_m8.xml", Config(worker), false);
+// The reference run from a Reset: the phase after each step, until Hops() hops are complete.
+std::vector<Phase> PhasesOfAReferenceRun(Robot& rig, bool worker) {
   std::vector<Phase> phases;
-  if (!rig.ok()) return phases;
+  rig.Restart();
   const int warmup = rig.c().config().driver.warmup_trials;
-  while (rig.c().hop() < kHops && rig.d()->time < 10.0) {
+  while (rig.c().hop() < Hops(rig) && rig.d()->time < 10.0) {
     // Step(HostOf(worker)) in two parts, to see the phase before the offline part runs.
     rig.Step(Host::kNothing);
     HopperController& c = rig.c();
@@ -107,12 +110,12 @@ void ExpectPromiseKept(const mjModel* m, const mjData* d, const HopperController
   }
 }
 
-// Reaches step `step` of the run on a fresh robot, then calls Compute on `trials` random states
+// Reaches step `step` of the run after a Reset, then calls Compute on `trials` random states
 // (each a new, slightly later instant of the same step, so that Compute does the full step),
 // restoring mjData between them. Then 50 real steps go on from the last corrupted controller.
-void ProbeAt(bool worker, int step, const std::string& phase, std::mt19937_64& rng, int trials) {
-  Robot rig("hopper_m8.xml", Config(worker), false);
-  ASSERT_TRUE(rig.ok());
+void ProbeAt(Robot& rig, bool worker, int step, const std::string& phase, std::mt19937_64& rng,
+             int trials) {
+  rig.Restart();
   // The probe comes after the step's physics, before the host's part: a hop handed over at this
   // step is still pending (host) or running on the worker thread (worker).
   for (int i = 0; i + 1 < step; ++i) rig.Step(HostOf(worker));
@@ -150,7 +153,11 @@ void ProbeAt(bool worker, int step, const std::string& phase, std::mt19937_64& r
 }
 
 void CheckEveryPhase(bool worker) {
-  const std::vector<Phase> phases = PhasesOfAReferenceRun(worker);
+  // One controller for every probe: Create derives u^0 on the model (seconds; a minute under
+  // the sanitizers), a Reset does not.
+  Robot rig("hopper_m8.xml", Config(worker), false);
+  ASSERT_TRUE(rig.ok());
+  const std::vector<Phase> phases = PhasesOfAReferenceRun(rig, worker);
   ASSERT_GT(phases.size(), 1000u) << "the reference run did not hop";
   // The first and the middle step of every run of equal phases, and the takeoff steps (the step
   // that hands a hop to the offline part).
@@ -175,7 +182,7 @@ void CheckEveryPhase(bool worker) {
   EXPECT_TRUE(learned_flight && learned_stance && warmup) << kinds.size() << " phase kinds";
   std::mt19937_64 rng(20);  // fixed seed
   // Probes in several hops are the same phase kinds; every kind is probed at the first and the
-  // middle step of its first occurrence (a fresh robot per probe keeps the test at ~5 s).
+  // middle step of its first occurrence.
   std::vector<std::pair<int, Phase>> chosen;
   for (const Phase& k : kinds) {
     int taken = 0;
@@ -188,9 +195,11 @@ void CheckEveryPhase(bool worker) {
   }
   for (const auto& [step, phase] : chosen) {
     SCOPED_TRACE(phase.Name() + " at step " + std::to_string(step));
-    ProbeAt(worker, step, phase.Name(), rng, 200);
+    ProbeAt(rig, worker, step, phase.Name(), rng, 200);
     if (::testing::Test::HasFatalFailure()) return;
   }
+  // Whatever the probes left in the controller, a Reset starts the same run again.
+  EXPECT_TRUE(PhasesOfAReferenceRun(rig, worker) == phases) << "Reset left a trace of the probes";
   std::printf("%s mode: %zu probes over %zu phase kinds, 200 random states each\n",
               worker ? "worker" : "host", chosen.size(), kinds.size());
 }
