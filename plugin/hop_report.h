@@ -39,6 +39,7 @@ struct HopReport {
   LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the hop
   double start_shift = 0.0;  ///< TrialOutcome::start_shift: the start correction of (36)
   bool restarted = false;    ///< TrialOutcome::restarted: the line search restarted after it
+  bool remeasured = false;   ///< TrialOutcome::remeasured: the hop re-ran the nominal's law
 };
 
 }  // namespace ddoc::plugin

@@ -388,6 +388,7 @@ void HopperController::TakeOfflineResult() {
     w.report.status = outcome_.status;
     w.report.start_shift = outcome_.start_shift;
     w.report.restarted = outcome_.restarted;
+    w.report.remeasured = outcome_.remeasured;
     w.needs_outcome = false;
     break;
   }

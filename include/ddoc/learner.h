@@ -88,6 +88,15 @@ struct LearnerSettings {
   bool restart_on_failure = false;
   /// alpha after a restart of the line search, in [0, 1]; 0 (default) = alpha_initial.
   double restart_alpha = 0.0;
+  /// restart_on_failure: before the line search restarts, one trial re-runs the law that
+  /// produced the nominal, and I^i becomes the mean of such re-measurements (the accepted
+  /// trial's own cost, biased low by its selection, is dropped): docs/engine.md, "A nominal
+  /// cost that is measured again". Default false.
+  bool remeasure_nominal = false;
+  /// remeasure_nominal: (36) asks a trial to beat I^i by noise_margin x sigma, sigma the
+  /// run-to-run spread of the nominal's cost estimated from the re-measurements (0 until the
+  /// first one). docs/engine.md, "A nominal cost that is measured again". Default 0 (off).
+  double noise_margin = 0.0;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
   BackwardPassSettings backward;         ///< (30)
@@ -139,6 +148,7 @@ struct TrialResult {
   double decrease = 0;      ///< I^{i+1} - (I^i + start_shift)
   double start_shift = 0;   ///< dI_start of LearnerSettings::start_correction (0 when off)
   bool restarted = false;   ///< restart_on_failure: the line search restarted after this trial
+  bool remeasured = false;  ///< remeasure_nominal: the trial re-ran the nominal's law
   double predicted = 0;     ///< the predicted change dI_pred(alpha) (0 for kLyapunov's pass)
   double step = 0;          ///< int |du|^2 dtau + |dT|^2 (measured dT, du vs. nominal inputs)
   double alpha = 0;         ///< alpha used for this trial
@@ -235,6 +245,14 @@ class Learner {
   int trials() const { return trials_; }
   /// Restarts so far (LearnerSettings::restart_on_failure).
   int restarts() const { return restarts_; }
+  /// The next trial re-measures the nominal (LearnerSettings::remeasure_nominal).
+  bool remeasuring() const { return remeasure_pending_; }
+  /// Re-measurements of the current nominal that I^i averages (0: I^i is the accepted trial's).
+  int nominal_samples() const { return nominal_samples_; }
+  /// sigma of noise_margin: sqrt of the mean of (s - s_prev)^2 / 2 over the re-measurements s,
+  /// s_prev the nominal's previous sample (its accepted trial's cost, or the last
+  /// re-measurement); 0 before the first.
+  double cost_noise() const;
   /// dI_start of LearnerSettings::start_correction for a trial that started at x0 (0 when x0
   /// has another size than the nominal's start). Call after the trial's cost reference is set.
   double StartShift(const ConstVectorRef& x0) const;
@@ -258,6 +276,8 @@ class Learner {
   bool RunPass();
   // restart_on_failure: alpha <- restart_alpha (or alpha_initial) around the same nominal.
   void RestartLineSearch(TrialResult* r);
+  // remeasure_nominal: I^i <- the mean of the nominal's re-measurements, with `cost` added.
+  void AddNominalSample(double cost);
   // The status after a new nominal: converged when the optimality (and step) tests hold.
   void UpdateConvergence();
   // The trial `measured` (run with controllers_[active_]) becomes the nominal with cost `cost`:
@@ -285,6 +305,13 @@ class Learner {
   int iteration_ = 0;
   int trials_ = 0;
   int restarts_ = 0;
+  bool remeasure_pending_ = false;  // remeasure_nominal: the next trial re-runs the nominal's law
+  bool remeasure_trial_ = false;    // the pending trial is such a re-measurement
+  int nominal_samples_ = 0;         // re-measurements of the nominal in nominal_cost_
+  double nominal_sample_sum_ = 0;
+  double last_sample_ = 0;          // the nominal's last sample (accepted cost or re-measurement)
+  double noise_sum_ = 0;            // sum of (s - s_prev)^2 / 2 over the re-measurements
+  int noise_count_ = 0;
   bool in_solve_ = false;  // inside Solve: restart_on_failure does not apply
   LearnerStatus status_ = LearnerStatus::kRunning;
   SwitchingTimeStep switching_step_;

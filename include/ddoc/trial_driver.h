@@ -49,6 +49,7 @@ struct TrialOutcome {
   LearnerStatus status = LearnerStatus::kRunning;  ///< the learner's status after the trial
   double start_shift = 0;  ///< TrialResult::start_shift (0 for trials the learner did not judge)
   bool restarted = false;  ///< TrialResult::restarted: the line search restarted after it
+  bool remeasured = false; ///< TrialResult::remeasured: it re-ran the nominal's law
 };
 
 /// Runs the trials of one of the three methods (Section V) with one engine, whatever the plant.

@@ -36,6 +36,7 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   final_i4 = h.terms.i4;
   (h.accepted ? accepted : rejected) += 1;
   restarts += h.restarted ? 1 : 0;
+  remeasured += h.remeasured ? 1 : 0;
   if (converged_hop < 0 && h.status == LearnerStatus::kConverged) converged_hop = h.hop;
   if (stopped_hop < 0 && h.status == LearnerStatus::kLineSearchFailed) stopped_hop = h.hop;
   learner_status = learns ? LearnerStatusName(h.status) : "none";
@@ -57,7 +58,7 @@ RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(
   trajectory_ = OpenOrThrow(dir_ + "/trajectory.csv");
   events_ = OpenOrThrow(dir_ + "/events.csv");
   std::fputs("hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,"
-             "du2,dT2,method,start_shift,restarted\n", hops_);
+             "du2,dT2,method,start_shift,restarted,remeasured\n", hops_);
   std::fputs("t,hop,phase,x,y,theta,phi,r,k_hip,k_leg,xd,yd,thetad,phid,rd,kd_hip,kd_leg,"
              "tau0,F0,k0_hip,k0_leg,push\n", trajectory_);
   std::fputs("t,hop,type,x,y,xd,yd\n", events_);
@@ -80,10 +81,11 @@ void RunLog::WriteHop(const plugin::HopReport& h) {
   errno = 0;
   const int n = std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
-               "%s,%.9g,%d\n",
+               "%s,%.9g,%d,%d\n",
                h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
                h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
-               h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0);
+               h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0,
+               h.remeasured ? 1 : 0);
   Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 
@@ -136,6 +138,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["mean_period"] = s.mean_period;
   j["accepted"] = s.accepted;
   j["restarts"] = s.restarts;
+  j["remeasured"] = s.remeasured;
   j["rejected"] = s.rejected;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;

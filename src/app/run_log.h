@@ -56,6 +56,7 @@ struct Summary {
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
   int restarts = 0;  // hops after which the line search restarted (restart_on_failure)
+  int remeasured = 0;  // hops that re-ran the nominal's law (remeasure_nominal)
   std::vector<Push> pushes;          // timed pushes, then the hop pushes resolved so far
   std::vector<HopPush> hop_pushes;   // the scenario's pushes by hop phase
   std::vector<std::optional<double>> hop_push_times;  // their start, once resolved

@@ -56,6 +56,8 @@ struct LearningOverrides {
   // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
   // model gait's takeoff state: ControllerConfig::anchor_reference)
   std::optional<bool> anchor_reference;
+  std::optional<bool> remeasure;        // remeasure="on": LearnerSettings::remeasure_nominal
+  std::optional<double> noise_margin;   // LearnerSettings::noise_margin (with remeasure="on")
 };
 
 /// <experiment .../>: settings that are NOT the paper and not defaults (docs/experiments.md).

@@ -131,6 +131,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   CheckSetting(settings.epsilon > 0, "epsilon must be > 0");
   CheckSetting(settings.restart_alpha >= 0 && settings.restart_alpha <= 1,
                "restart_alpha must be in [0, 1]");
+  CheckSetting(settings.noise_margin >= 0 && std::isfinite(settings.noise_margin),
+               "noise_margin must be finite and >= 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
@@ -176,7 +178,14 @@ bool Learner::AcceptNominal(const Trajectory& direction, double cost) {
   }
   nominal_cost_ = cost;
   nominal_own_cost_ = settings_.start_correction ? EvaluateCost(*problem_, nominal_).total : 0.0;
+  nominal_samples_ = 0;
+  nominal_sample_sum_ = 0;
+  last_sample_ = cost;
   return true;
+}
+
+double Learner::cost_noise() const {
+  return noise_count_ > 0 ? std::sqrt(noise_sum_ / noise_count_) : 0.0;
 }
 
 double Learner::StartShift(const ConstVectorRef& x0) const {
@@ -197,6 +206,19 @@ void Learner::RestartLineSearch(TrialResult* r) {
   alpha_ = settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;
   ++restarts_;
   r->restarted = true;
+  remeasure_pending_ = settings_.remeasure_nominal;
+}
+
+void Learner::AddNominalSample(double cost) {
+  if (!std::isfinite(cost)) return;
+  if (std::isfinite(last_sample_)) {
+    noise_sum_ += 0.5 * (cost - last_sample_) * (cost - last_sample_);
+    ++noise_count_;
+  }
+  last_sample_ = cost;
+  ++nominal_samples_;
+  nominal_sample_sum_ += cost;
+  nominal_cost_ = nominal_sample_sum_ / nominal_samples_;
 }
 
 bool Learner::AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost) {
@@ -260,6 +282,10 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   alpha_ = settings_.alpha_initial;
   trials_ = 0;
   restarts_ = 0;
+  remeasure_pending_ = false;
+  remeasure_trial_ = false;
+  noise_sum_ = 0;
+  noise_count_ = 0;
   accepted_ = -1;
   active_ = 0;
   trial_pending_ = false;
@@ -278,6 +304,15 @@ OnlineController& Learner::NextTrial() {
   if (status_ == LearnerStatus::kLineSearchFailed) {
     // Terminated: keep applying the control law of the previous (accepted) iteration.
     trial_pending_ = true;
+    if (accepted_ >= 0) return controllers_[accepted_];
+    controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));
+    return controllers_[active_];
+  }
+  if (remeasure_pending_) {
+    // The law that produced the nominal (before any accepted trial: the nominal's inputs with
+    // the feedback; TrialDriver runs u^0 instead, which produced it).
+    trial_pending_ = true;
+    remeasure_trial_ = true;
     if (accepted_ >= 0) return controllers_[accepted_];
     controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));
     return controllers_[active_];
@@ -340,7 +375,11 @@ TrialResult Learner::AbortTrial() {
   r.decrease = r.cost;
   r.optimality = optimality_.total;
   trial_pending_ = false;
-  if (status_ != LearnerStatus::kLineSearchFailed) {
+  if (remeasure_trial_) {  // a failed re-measurement: no sample; the restarted search goes on
+    remeasure_trial_ = false;
+    remeasure_pending_ = false;
+    r.remeasured = true;
+  } else if (status_ != LearnerStatus::kLineSearchFailed) {
     alpha_ *= settings_.interpolate_backtracking ? 0.1 : settings_.gamma;
     if (alpha_ < settings_.alpha_min) {
       if (settings_.restart_on_failure && !in_solve_) {
@@ -383,19 +422,33 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.predicted = a * pass_.predicted_linear() + 0.5 * a * a * pass_.predicted_quadratic() +
                 switching_step_.model_change;
   trial_pending_ = false;
+  if (remeasure_trial_) {  // a sample of the nominal's cost, not a candidate
+    remeasure_trial_ = false;
+    remeasure_pending_ = false;
+    r.remeasured = true;
+    r.predicted = 0;
+    r.alpha = accepted_ >= 0 ? controllers_[accepted_].alpha() : 0.0;
+    AddNominalSample(r.cost - r.start_shift);
+    r.iteration = iteration_;
+    r.status = status_;
+    r.optimality = optimality_.total;
+    return r;
+  }
   if (status_ == LearnerStatus::kLineSearchFailed) {  // terminated: only report
     r.iteration = iteration_;
     r.status = status_;
     r.optimality = optimality_.total;
     return r;
   }
+  const double margin = settings_.noise_margin * cost_noise();
   if (settings_.acceptance == Acceptance::kSufficientDecrease) {
-    r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step;
+    r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step - margin;
   } else {
     // Armijo on the predicted change; a step predicted not to decrease the cost (rounding
     // level) is accepted only if the measured cost did not rise.
     r.accepted = std::isfinite(r.cost) &&
-                 (r.predicted < 0 ? r.decrease <= settings_.c * r.predicted : r.decrease <= 0);
+                 (r.predicted < 0 ? r.decrease <= settings_.c * r.predicted - margin
+                                  : r.decrease <= -margin);
   }
   if (r.accepted && !AdoptTrial(measured, direction_plant, r.cost)) r.accepted = false;
   if (r.accepted) {

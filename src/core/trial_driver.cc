@@ -84,12 +84,14 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.status = r.status;
     out.start_shift = r.start_shift;
     out.restarted = r.restarted;
+    out.remeasured = r.remeasured;
     UseLearnedLaw(learner_->NextTrial());
-    // Terminated before any trial passed (36): the law of iteration 0 is u^0, which produced
-    // the nominal, not a replay of the nominal's inputs (Learner::NextTrial).
-    if (learner_->status() == LearnerStatus::kLineSearchFailed && learner_->iteration() == 0) {
-      UseFallback();
-    }
+    // Terminated, or re-measuring the nominal, before any trial passed (36): the law of
+    // iteration 0 is u^0, which produced the nominal, not a replay of the nominal's inputs
+    // (Learner::NextTrial).
+    const bool replay =
+        learner_->status() == LearnerStatus::kLineSearchFailed || learner_->remeasuring();
+    if (replay && learner_->iteration() == 0) UseFallback();
   }
   if (!learns && !frozen_) UseFallback();
   ++trial_;

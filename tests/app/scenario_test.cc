@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "hopper_run.h"
 #include "run_log.h"
 
 namespace ddoc::app {
@@ -154,6 +155,26 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   s = LoadScenario(Write(Fill(fmt, "preset='default'")));
   EXPECT_FALSE(s.learning.paper);
   ExpectError(Fill(fmt, "preset='papr'"), {"<learning>", "preset=\"papr\"", "default or paper"});
+}
+
+TEST_F(ScenarioTest, LearningRemeasureAndNoiseMargin) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
+  Scenario s = LoadScenario(Write(Fill(fmt, "remeasure='on' noise_margin='1.5'")));
+  ASSERT_TRUE(s.learning.remeasure.has_value());
+  EXPECT_TRUE(*s.learning.remeasure);
+  ASSERT_TRUE(s.learning.noise_margin.has_value());
+  EXPECT_DOUBLE_EQ(*s.learning.noise_margin, 1.5);
+  LearnerSettings l = ControllerConfigFor(s, HopperParams()).driver.learner;
+  EXPECT_TRUE(l.remeasure_nominal);
+  EXPECT_DOUBLE_EQ(l.noise_margin, 1.5);
+  s = LoadScenario(Write(Fill(fmt, "remeasure='off'")));
+  EXPECT_FALSE(*s.learning.remeasure);
+  EXPECT_FALSE(s.learning.noise_margin.has_value());
+  l = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams()).driver.learner;
+  EXPECT_FALSE(l.remeasure_nominal);  // the hopper's default
+  EXPECT_EQ(l.noise_margin, 0.0);
+  ExpectError(Fill(fmt, "remeasure='yes'"), {"<learning>", "remeasure=\"yes\"", "off or on"});
+  ExpectError(Fill(fmt, "noise_margin='-1'"), {"noise_margin"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

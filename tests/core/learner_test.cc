@@ -412,6 +412,124 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   EXPECT_EQ(batch.restarts(), 0);
 }
 
+// remeasure_nominal: a nominal measured from a lucky start (a third of the usual start, under
+// half the cost) makes (36) reject every later trial from the usual start, improvements
+// included, and the restarted line search never ends that. Re-running the nominal's law at the
+// restart replaces I^i by a fair sample: the known answer is the cost of that law (the
+// nominal's inputs with the pass's feedback) run from the usual start, computed here directly;
+// the improving trial that follows is accepted.
+TEST(Learner, RemeasuringTheNominalEndsTheRuleOfALuckyHop) {
+  FineLq f;
+  const Vector lucky = f.lq.x0 / 3.0;
+  Trajectory first, measured;
+  FunctionPolicy zero = ZeroInputPolicy();
+  f.plant.Run(lucky, zero, &first);
+  for (const bool remeasure : {false, true}) {
+    SCOPED_TRACE(remeasure ? "remeasure_nominal" : "the accepted trial's cost");
+    LearnerSettings settings = FineLq::Settings(false);
+    settings.acceptance = Acceptance::kSufficientDecrease;
+    settings.c = 1e-7;
+    settings.gamma = 0.5;
+    settings.interpolate_backtracking = false;
+    settings.alpha_min = 0.1;  // 1, 1/2, 1/4, 1/8 < 0.1: the fourth rejection restarts
+    settings.restart_on_failure = true;
+    settings.remeasure_nominal = remeasure;
+    Learner learner(f.p.problem, settings);
+    learner.Initialize(first);
+    const double lucky_cost = learner.nominal_cost();
+    f.plant.Run(f.lq.x0, learner.ConvergedPolicy(0.0), &measured);
+    const double fair_cost = EvaluateCost(f.p.problem, measured).total;
+    ASSERT_GT(fair_cost, 2.0 * lucky_cost);
+    int accepted = 0, remeasured = 0;
+    for (int i = 0; i < 10; ++i) {
+      const bool remeasuring = learner.remeasuring();
+      f.plant.Run(f.lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      EXPECT_EQ(r.remeasured, remeasuring);
+      if (r.remeasured) {
+        ++remeasured;
+        EXPECT_FALSE(r.accepted);
+        if (accepted == 0) {  // the first re-measurement replaces the lucky cost
+          EXPECT_NEAR(r.cost, fair_cost, 1e-9 * fair_cost);
+          EXPECT_NEAR(learner.nominal_cost(), fair_cost, 1e-9 * fair_cost);
+          EXPECT_EQ(learner.nominal_samples(), 1);
+        }
+      }
+      if (r.accepted) {
+        ++accepted;
+        EXPECT_LT(r.cost, fair_cost) << "an improvement of the law, measured from the same start";
+        EXPECT_EQ(learner.nominal_samples(), 0);
+      }
+      if (!remeasure) {
+        EXPECT_GT(r.cost, lucky_cost) << "every trial looks worse than the lucky hop";
+      }
+    }
+    EXPECT_EQ(accepted > 0, remeasure);
+    EXPECT_EQ(remeasured > 0, remeasure);
+    if (!remeasure) EXPECT_EQ(learner.nominal_cost(), lucky_cost);
+  }
+}
+
+// noise_margin: sigma from the re-measurement (the lucky and the fair cost of the nominal law
+// differ by d0: sigma = |d0| / sqrt(2)). The first trial after the re-measurement that passes
+// (36) without a margin, decrease d < 0, passes it with a margin of half |d| (a margin only
+// rejects more, so the trials before it are the same) and not with twice |d|.
+TEST(Learner, NoiseMarginAsksForADecreaseAboveTheMeasuredSpread) {
+  FineLq f;
+  Trajectory first, measured;
+  FunctionPolicy zero = ZeroInputPolicy();
+  f.plant.Run(f.lq.x0 / 3.0, zero, &first);
+  // The trials after the first re-measurement, until one is accepted or `count` ran; sigma.
+  auto trials_after_remeasurement = [&](double margin, int count, double* sigma) {
+    LearnerSettings settings = FineLq::Settings(false);
+    settings.acceptance = Acceptance::kSufficientDecrease;
+    settings.c = 1e-7;
+    settings.gamma = 0.5;
+    settings.interpolate_backtracking = false;
+    settings.alpha_min = 0.1;
+    settings.restart_on_failure = true;
+    settings.remeasure_nominal = true;
+    settings.noise_margin = margin;
+    Learner learner(f.p.problem, settings);
+    learner.Initialize(first);
+    const double lucky = learner.nominal_cost();
+    EXPECT_EQ(learner.cost_noise(), 0.0);
+    std::vector<TrialResult> after;
+    for (int i = 0; i < 30 && static_cast<int>(after.size()) < count; ++i) {
+      f.plant.Run(f.lq.x0, learner.NextTrial(), &measured);
+      const TrialResult r = learner.CompleteTrial(measured);
+      if (r.remeasured && *sigma == 0.0) {
+        *sigma = learner.cost_noise();
+        EXPECT_NEAR(*sigma, std::abs(r.cost - lucky) / std::sqrt(2.0), 1e-12 * r.cost);
+      } else if (*sigma > 0.0) {
+        after.push_back(r);
+        if (r.accepted) break;
+      }
+    }
+    return after;
+  };
+  double sigma = 0;
+  const std::vector<TrialResult> plain = trials_after_remeasurement(0.0, 30, &sigma);
+  ASSERT_FALSE(plain.empty());
+  ASSERT_TRUE(plain.back().accepted);
+  ASSERT_GT(sigma, 0.0);
+  const double d = -plain.back().decrease;
+  ASSERT_GT(d, 0.0);
+  const int n = static_cast<int>(plain.size());
+  double s2 = 0;
+  const std::vector<TrialResult> half = trials_after_remeasurement(0.5 * d / sigma, n, &s2);
+  ASSERT_EQ(half.size(), plain.size());
+  EXPECT_TRUE(half.back().accepted);
+  s2 = 0;
+  const std::vector<TrialResult> twice = trials_after_remeasurement(2.0 * d / sigma, n, &s2);
+  ASSERT_EQ(twice.size(), plain.size());
+  EXPECT_FALSE(twice.back().accepted);
+  EXPECT_NEAR(twice.back().decrease, -d, 1e-12 * d);  // the same trial, judged with the margin
+  LearnerSettings bad = FineLq::Settings(false);
+  bad.noise_margin = -1;
+  EXPECT_THROW(Learner(f.p.problem, bad), InvalidArgument);
+}
+
 INSTANTIATE_TEST_SUITE_P(Presets, TwoModeLqTest, ::testing::Values(0, 1));
 
 // The measured cost change of one trial at step size alpha from the nominal of `initial`.

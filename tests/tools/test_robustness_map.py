@@ -226,6 +226,7 @@ class UsageTest(TempDirTest):
             (["--masses", "8,heavy", "--hopper", FAKE], ["--masses"]),
             (["--preset", "paper", "--hopper", FAKE], ["--preset paper", "no --preset flag"]),
             (["--hopper", os.path.join(self.tmp, "nope")], ["ddoc-hopper not found"]),
+            (["--learning", "/><push time='1'", "--hopper", FAKE], ["--learning", "XML attributes"]),
         ])
         r = run_tool("robustness_map", "merge", self.tmp, "--out", os.path.join(self.tmp, "m"))
         self.assertEqual(r.returncode, 2)
@@ -266,6 +267,27 @@ class RealRunTest(TempDirTest):
         self.assertIn(push["push_status"], ("recovered", "not recovered"))
         with open(os.path.join(out, "summary.md")) as f:
             self.assertIn("| 9 | 0.01 | 0.5 | 5, ", f.read())
+
+    def test_learning_attributes_reach_every_run(self):
+        # --learning (experiments): the <learning> element of every generated scenario, read by
+        # ddoc-hopper; an unknown attribute is that run's
+        # error (exit 2) and the map's exit 1.
+        out = os.path.join(self.tmp, "map")
+        common = ["--maps", "mass", "--methods", "alg1", "--masses", "8", "--drags", "0",
+                  "--speeds", "0.5", "--hopper", HOPPER, "--jobs", "1"]
+        r = run_tool("robustness_map", *common, "--hops", "3", "--out", out,
+                     "--learning", 'remeasure="on" noise_margin="2"')
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(out, "scenarios", "mass_m8_cd0_v0.5_alg1.xml")) as f:
+            self.assertIn('<learning remeasure="on" noise_margin="2"/>', f.read())
+        with open(os.path.join(out, "manifest.json")) as f:
+            self.assertEqual(json.load(f)["grid"]["learning"], 'remeasure="on" noise_margin="2"')
+        bad = os.path.join(self.tmp, "bad")
+        r = run_tool("robustness_map", *common, "--hops", "2", "--out", bad,
+                     "--learning", 'remeasur="on"')
+        self.assertEqual(r.returncode, 1)
+        [row] = csv_rows(os.path.join(bad, "mass_map.csv"))
+        self.assertEqual(row["exit"], "2")
 
 
 if __name__ == "__main__":
