@@ -412,6 +412,21 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   EXPECT_EQ(batch.restarts(), 0);
 }
 
+// (36) as printed, halving alpha from 1; 1, 1/2, 1/4, 1/8 < alpha_min = 0.1: the fourth
+// rejection restarts the line search. No start correction.
+LearnerSettings RestartingSettings(bool remeasure, double noise_margin) {
+  LearnerSettings s = FineLq::Settings(false);
+  s.acceptance = Acceptance::kSufficientDecrease;
+  s.c = 1e-7;
+  s.gamma = 0.5;
+  s.interpolate_backtracking = false;
+  s.alpha_min = 0.1;
+  s.restart_on_failure = true;
+  s.remeasure_nominal = remeasure;
+  s.noise_margin = noise_margin;
+  return s;
+}
+
 // remeasure_nominal: a nominal measured from a lucky start (a third of the usual start, under
 // half the cost) makes (36) reject every later trial from the usual start, improvements
 // included, and the restarted line search never ends that. Re-running the nominal's law at the
@@ -426,15 +441,7 @@ TEST(Learner, RemeasuringTheNominalEndsTheRuleOfALuckyHop) {
   f.plant.Run(lucky, zero, &first);
   for (const bool remeasure : {false, true}) {
     SCOPED_TRACE(remeasure ? "remeasure_nominal" : "the accepted trial's cost");
-    LearnerSettings settings = FineLq::Settings(false);
-    settings.acceptance = Acceptance::kSufficientDecrease;
-    settings.c = 1e-7;
-    settings.gamma = 0.5;
-    settings.interpolate_backtracking = false;
-    settings.alpha_min = 0.1;  // 1, 1/2, 1/4, 1/8 < 0.1: the fourth rejection restarts
-    settings.restart_on_failure = true;
-    settings.remeasure_nominal = remeasure;
-    Learner learner(f.p.problem, settings);
+    Learner learner(f.p.problem, RestartingSettings(remeasure, 0.0));
     learner.Initialize(first);
     const double lucky_cost = learner.nominal_cost();
     f.plant.Run(f.lq.x0, learner.ConvergedPolicy(0.0), &measured);
@@ -481,16 +488,7 @@ TEST(Learner, NoiseMarginAsksForADecreaseAboveTheMeasuredSpread) {
   f.plant.Run(f.lq.x0 / 3.0, zero, &first);
   // The trials after the first re-measurement, until one is accepted or `count` ran; sigma.
   auto trials_after_remeasurement = [&](double margin, int count, double* sigma) {
-    LearnerSettings settings = FineLq::Settings(false);
-    settings.acceptance = Acceptance::kSufficientDecrease;
-    settings.c = 1e-7;
-    settings.gamma = 0.5;
-    settings.interpolate_backtracking = false;
-    settings.alpha_min = 0.1;
-    settings.restart_on_failure = true;
-    settings.remeasure_nominal = true;
-    settings.noise_margin = margin;
-    Learner learner(f.p.problem, settings);
+    Learner learner(f.p.problem, RestartingSettings(true, margin));
     learner.Initialize(first);
     const double lucky = learner.nominal_cost();
     EXPECT_EQ(learner.cost_noise(), 0.0);
