@@ -6,6 +6,7 @@
 #define DDOC_LEARNER_H_
 
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "ddoc/backward_pass.h"
@@ -204,8 +205,10 @@ class Learner {
   explicit Learner(const Problem& problem, const LearnerSettings& settings = {});
 
   /// Algorithm 1 "Initialize": the trial of u^0, T^0 measured on the cost plant, and the
-  /// direction trajectory (nullptr: the same). Computes I^0 and runs (30).
-  void Initialize(const Trajectory& measured, const Trajectory* direction = nullptr);
+  /// direction trajectory (nullptr: the same). Computes I^0 (or takes `cost`, e.g. the mean
+  /// over several runs of u^0 of which `measured` is one) and runs (30).
+  void Initialize(const Trajectory& measured, const Trajectory* direction = nullptr,
+                  std::optional<double> cost = std::nullopt);
 
   /// The control law for the next trial: (31) with the current alpha, then Load (33)-(34).
   /// The returned controller stays valid until the next NextTrial/CompleteTrial.
@@ -214,7 +217,10 @@ class Learner {
   /// Ends the trial run with NextTrial(): measured cost, (36), backtracking or acceptance.
   /// On acceptance the new nominal is `measured`, or, when direction_plant is given (mRL), the
   /// same policy re-run on direction_plant from measured.x0. Then (30) runs for the next trial.
-  TrialResult CompleteTrial(const Trajectory& measured, Plant* direction_plant = nullptr);
+  /// `cost`, when given, is the trial's measured cost instead of EvaluateCost(measured) (e.g.
+  /// the mean over several runs of the law, of which `measured` is one).
+  TrialResult CompleteTrial(const Trajectory& measured, Plant* direction_plant = nullptr,
+                            std::optional<double> cost = std::nullopt);
 
   /// A trial that could not be measured (robot fell, NaN): counts as rejected.
   TrialResult AbortTrial();

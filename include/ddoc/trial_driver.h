@@ -32,6 +32,10 @@ struct TrialDriverSettings {
   /// Trials run with the fallback law u^0 before learning starts, >= 1; the last of them is
   /// Algorithm 1's "Initialize" trial (x^0, I^0). Default 1 = Algorithm 1 as printed.
   int warmup_trials = 1;
+  /// Runs of each law the learner judges (u^0 of "Initialize" and every trial), >= 1: the
+  /// trial's cost is the mean of their measured costs, its trajectory the last run's (docs/
+  /// engine.md, "Trials of several runs"). Warm-up runs before "Initialize" count once. Default 1.
+  int runs_per_trial = 1;
   LearnerSettings learner;  ///< Algorithm 1 (unused by kOcfb); default LearnerSettings{}
 };
 
@@ -50,6 +54,9 @@ struct TrialOutcome {
   double start_shift = 0;  ///< TrialResult::start_shift (0 for trials the learner did not judge)
   bool restarted = false;  ///< TrialResult::restarted: the line search restarted after it
   bool remeasured = false; ///< TrialResult::remeasured: it re-ran the nominal's law
+  /// runs_per_trial > 1: this run is not the trial's last; the law runs again and the learner
+  /// has not seen the run yet (`cost` is this run's).
+  bool repeats = false;
 };
 
 /// Runs the trials of one of the three methods (Section V) with one engine, whatever the plant.
@@ -135,6 +142,9 @@ class TrialDriver {
   OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
   int trial_ = 0;
   bool frozen_ = false;
+  bool initialized_ = false;  // the learner's "Initialize" ran
+  int runs_ = 0;              // runs of the current law so far (runs_per_trial)
+  double run_cost_sum_ = 0;   // their measured costs
 };
 
 }  // namespace ddoc

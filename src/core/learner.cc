@@ -265,8 +265,10 @@ void Learner::UpdateConvergence() {
   status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
 }
 
-void Learner::Initialize(const Trajectory& measured, const Trajectory* direction) {
-  const CostBreakdown cost = EvaluateCost(*problem_, measured);
+void Learner::Initialize(const Trajectory& measured, const Trajectory* direction,
+                         std::optional<double> given_cost) {
+  CostBreakdown cost = EvaluateCost(*problem_, measured);
+  if (given_cost) cost.total = *given_cost;
   if (!std::isfinite(cost.total)) {
     throw InvalidArgument("Learner::Initialize: the initial trial has a non-finite cost");
   }
@@ -394,7 +396,8 @@ TrialResult Learner::AbortTrial() {
   return r;
 }
 
-TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_plant) {
+TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_plant,
+                                   std::optional<double> cost) {
   if (!initialized_) throw InvalidArgument("Learner::CompleteTrial: call Initialize first");
   if (!trial_pending_) {
     throw InvalidArgument("Learner::CompleteTrial: no trial pending (call NextTrial first)");
@@ -411,7 +414,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   ++trials_;
   r.trial = trials_;
   r.alpha = alpha_;
-  r.cost = r.breakdown.total;
+  r.cost = cost ? *cost : r.breakdown.total;
   r.nominal_cost = nominal_cost_;
   r.start_shift = StartShift(measured.x0);
   r.decrease = r.cost - (nominal_cost_ + r.start_shift);

@@ -2,6 +2,7 @@
 #include "ddoc/trial_driver.h"
 
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "ddoc/cost.h"
@@ -20,6 +21,10 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
     throw InvalidArgument("TrialDriverSettings: warmup_trials = " +
                           std::to_string(settings.warmup_trials) + ", expected >= 1");
   }
+  if (settings.runs_per_trial < 1) {
+    throw InvalidArgument("TrialDriverSettings: runs_per_trial = " +
+                          std::to_string(settings.runs_per_trial) + ", expected >= 1");
+  }
   if (settings.method == Method::kMrl && prediction == nullptr) {
     throw InvalidArgument("TrialDriver: method kMrl needs a prediction plant (the model)");
   }
@@ -33,6 +38,9 @@ void TrialDriver::Reset() {
   }
   trial_ = 0;
   frozen_ = false;
+  initialized_ = false;
+  runs_ = 0;
+  run_cost_sum_ = 0;
   UseFallback();
 }
 
@@ -56,20 +64,38 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
   out.ran_fallback = runs_fallback();
   const bool learns = CompletionLearns();
   if (reference_) reference_(measured, learns);
+  // runs_per_trial: the runs of a law the learner judges are averaged; all but the last only
+  // report, and the law runs again.
+  std::optional<double> mean_cost;
+  if (learns && settings_.runs_per_trial > 1) {
+    const double cost = EvaluateCost(*problem_, measured).total;
+    run_cost_sum_ += cost;
+    if (++runs_ < settings_.runs_per_trial) {
+      out.repeats = true;
+      out.cost = cost;
+      out.status = learner_->status();
+      ++trial_;
+      return out;
+    }
+    mean_cost = run_cost_sum_ / runs_;
+    runs_ = 0;
+    run_cost_sum_ = 0;
+  }
   if (!learns) {
     // Warm-up, OC-FB or frozen: report the measured cost; the law stays (u^0 unless frozen).
     out.accepted = true;
     out.cost = EvaluateCost(*problem_, measured).total;
     if (learner_) out.status = learner_->status();
-  } else if (trial_ + 1 == settings_.warmup_trials) {
+  } else if (!initialized_) {
     // This trial ran u^0, T^0: Algorithm 1's "Initialize" (x^0, I^0, then (30)).
     if (settings_.method == Method::kMrl) {
       Trajectory predicted;
       prediction_->Run(measured.x0, *fallback_, &predicted);
-      learner_->Initialize(measured, &predicted);
+      learner_->Initialize(measured, &predicted, mean_cost);
     } else {
-      learner_->Initialize(measured);
+      learner_->Initialize(measured, nullptr, mean_cost);
     }
+    initialized_ = true;
     out.learned = true;
     out.accepted = true;
     out.cost = learner_->nominal_cost();
@@ -77,7 +103,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     UseLearnedLaw(learner_->NextTrial());
   } else {
     const TrialResult r = learner_->CompleteTrial(
-        measured, settings_.method == Method::kMrl ? prediction_ : nullptr);
+        measured, settings_.method == Method::kMrl ? prediction_ : nullptr, mean_cost);
     out.learned = true;
     out.accepted = r.accepted;
     out.cost = r.cost;

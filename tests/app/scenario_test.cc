@@ -157,7 +157,7 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   ExpectError(Fill(fmt, "preset='papr'"), {"<learning>", "preset=\"papr\"", "default or paper"});
 }
 
-TEST_F(ScenarioTest, LearningRemeasureAndNoiseMargin) {
+TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><learning %s/></ddoc_scenario>";
   Scenario s = LoadScenario(Write(Fill(fmt, "remeasure='on' noise_margin='1.5'")));
   ASSERT_TRUE(s.learning.remeasure.has_value());
@@ -175,6 +175,12 @@ TEST_F(ScenarioTest, LearningRemeasureAndNoiseMargin) {
   EXPECT_EQ(l.noise_margin, 0.0);
   ExpectError(Fill(fmt, "remeasure='yes'"), {"<learning>", "remeasure=\"yes\"", "off or on"});
   ExpectError(Fill(fmt, "noise_margin='-1'"), {"noise_margin"});
+  s = LoadScenario(Write(Fill(fmt, "hops_per_trial='3'")));
+  EXPECT_EQ(ControllerConfigFor(s, HopperParams()).driver.runs_per_trial, 3);
+  EXPECT_EQ(ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams())
+                .driver.runs_per_trial,
+            1);
+  ExpectError(Fill(fmt, "hops_per_trial='0'"), {"hops_per_trial", ">= 1"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

@@ -254,6 +254,62 @@ TEST_F(TrialDriverTest, BadSettingsAreNamed) {
   ExpectThrowsWith([&] { TrialDriver d(p.problem, bad_gamma, fallback); }, "gamma");
   TrialDriver d(p.problem, DriverSettings(Method::kAlg1), fallback);
   ExpectThrowsWith([&] { d.Run(plant, lq.x0, -1); }, "trials = -1");
+  TrialDriverSettings no_runs = DriverSettings(Method::kAlg1);
+  no_runs.runs_per_trial = 0;
+  ExpectThrowsWith([&] { TrialDriver e(p.problem, no_runs, fallback); },
+                   "TrialDriverSettings: runs_per_trial = 0, expected >= 1");
+}
+
+// runs_per_trial = 2 from alternating starts: every law the learner judges runs twice in a
+// row; the first run only reports (repeats), and the cost the learner gets is the mean of the
+// two runs' costs, computed here from the measured trajectories. The trajectory it keeps is the
+// second run's.
+TEST_F(TrialDriverTest, TrialsOfSeveralRunsAreJudgedOnTheirMeanCost) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.runs_per_trial = 2;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  const Vector other = 1.2 * lq.x0;
+  double previous_cost = 0;
+  const Policy* previous_law = nullptr;
+  for (int i = 0; i < 12; ++i) {
+    const Policy* law = &driver.law();
+    plant.Run(i % 2 == 0 ? Vector(lq.x0) : other, driver.law(), &measured);
+    const double cost = EvaluateCost(p.problem, measured).total;
+    const TrialOutcome o = driver.CompleteTrial(measured);
+    if (i % 2 == 0) {  // the first run of a law
+      EXPECT_TRUE(o.repeats) << "run " << i;
+      EXPECT_FALSE(o.learned);
+      EXPECT_EQ(o.cost, cost);
+      EXPECT_EQ(&driver.law(), law) << "the same law runs again";
+    } else {
+      EXPECT_FALSE(o.repeats) << "run " << i;
+      EXPECT_TRUE(o.learned);
+      EXPECT_EQ(law, previous_law);
+      const double mean = 0.5 * (previous_cost + cost);
+      if (i == 1) {  // Initialize: I^0 is the mean of u^0's two runs, x^0 the second run
+        EXPECT_DOUBLE_EQ(driver.learner()->nominal_cost(), mean);
+        EXPECT_EQ(driver.learner()->nominal().x0, other);
+      } else {
+        EXPECT_DOUBLE_EQ(o.cost, mean);
+        if (o.accepted) EXPECT_DOUBLE_EQ(driver.learner()->nominal_cost(), mean);
+      }
+    }
+    previous_cost = cost;
+    previous_law = law;
+  }
+  EXPECT_EQ(driver.learner()->trials(), 5);  // 6 judged laws: Initialize and 5 trials
+  // From one start (a deterministic plant) the two runs are equal: the learner sees what it
+  // sees with one run per trial, trial for trial.
+  TrialDriver once(p.problem, DriverSettings(Method::kAlg1), fallback);
+  TrialDriver twice(p.problem, settings, fallback);
+  const std::vector<TrialOutcome> a = once.Run(plant, lq.x0, 6);
+  const std::vector<TrialOutcome> b = twice.Run(plant, lq.x0, 12);
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].cost, b[2 * i + 1].cost) << "trial " << i;
+    EXPECT_EQ(a[i].accepted, b[2 * i + 1].accepted) << "trial " << i;
+  }
+  EXPECT_EQ(once.learner()->nominal_cost(), twice.learner()->nominal_cost());
 }
 
 }  // namespace
