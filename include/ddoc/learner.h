@@ -245,6 +245,8 @@ class Learner {
   OnlineController& ConvergedPolicy(double alpha = 1.0);
 
   LearnerStatus status() const { return status_; }
+  /// Initialize has run (NextTrial and CompleteTrial may be called).
+  bool initialized() const { return initialized_; }
   bool converged() const { return status_ == LearnerStatus::kConverged; }
   double alpha() const { return alpha_; }
   int iteration() const { return iteration_; }
@@ -280,6 +282,12 @@ class Learner {
   bool AcceptNominal(const Trajectory& direction, double cost);
   // (30) on nominal_ with the current mu, raising it on failure.
   bool RunPass();
+  // The law that produced the nominal: the accepted trial's controller, or (none accepted yet)
+  // the nominal's inputs with the pass's feedback (TrialDriver runs u^0 instead, which
+  // produced it).
+  OnlineController& NominalLaw();
+  // r with the learner's state after the trial: iteration, status, optimality.
+  TrialResult Reported(TrialResult r) const;
   // restart_on_failure: alpha <- restart_alpha (or alpha_initial) around the same nominal.
   void RestartLineSearch(TrialResult* r);
   // remeasure_nominal: I^i <- the mean of the nominal's re-measurements, with `cost` added.

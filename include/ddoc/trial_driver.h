@@ -142,7 +142,6 @@ class TrialDriver {
   OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
   int trial_ = 0;
   bool frozen_ = false;
-  bool initialized_ = false;  // the learner's "Initialize" ran
   int runs_ = 0;              // runs of the current law so far (runs_per_trial)
   double run_cost_sum_ = 0;   // their measured costs
 };

@@ -301,23 +301,20 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   }
 }
 
+OnlineController& Learner::NominalLaw() {
+  if (accepted_ >= 0) return controllers_[accepted_];
+  controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));
+  return controllers_[active_];
+}
+
 OnlineController& Learner::NextTrial() {
   if (!initialized_) throw InvalidArgument("Learner::NextTrial: call Initialize first");
-  if (status_ == LearnerStatus::kLineSearchFailed) {
+  if (status_ == LearnerStatus::kLineSearchFailed || remeasure_pending_) {
     // Terminated: keep applying the control law of the previous (accepted) iteration.
+    // Re-measuring: the same law, whose cost is a sample of I^i (remeasure_nominal).
     trial_pending_ = true;
-    if (accepted_ >= 0) return controllers_[accepted_];
-    controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));
-    return controllers_[active_];
-  }
-  if (remeasure_pending_) {
-    // The law that produced the nominal (before any accepted trial: the nominal's inputs with
-    // the feedback; TrialDriver runs u^0 instead, which produced it).
-    trial_pending_ = true;
-    remeasure_trial_ = true;
-    if (accepted_ >= 0) return controllers_[accepted_];
-    controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));
-    return controllers_[active_];
+    remeasure_trial_ = remeasure_pending_ && status_ != LearnerStatus::kLineSearchFailed;
+    return NominalLaw();
   }
   switching_step_ = SolveSwitchingTimeUpdate(*problem_, nominal_.T, pass_.P22_initial(),
                                              pass_.p2_initial(), alpha_, settings_.switching);
@@ -432,17 +429,9 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     r.predicted = 0;
     r.alpha = accepted_ >= 0 ? controllers_[accepted_].alpha() : 0.0;
     AddNominalSample(r.cost - r.start_shift);
-    r.iteration = iteration_;
-    r.status = status_;
-    r.optimality = optimality_.total;
-    return r;
+    return Reported(r);
   }
-  if (status_ == LearnerStatus::kLineSearchFailed) {  // terminated: only report
-    r.iteration = iteration_;
-    r.status = status_;
-    r.optimality = optimality_.total;
-    return r;
-  }
+  if (status_ == LearnerStatus::kLineSearchFailed) return Reported(r);  // terminated: only report
   const double margin = settings_.noise_margin * cost_noise();
   if (settings_.acceptance == Acceptance::kSufficientDecrease) {
     r.accepted = std::isfinite(r.cost) && r.decrease <= -settings_.c * r.step - margin;
@@ -498,6 +487,10 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
       }
     }
   }
+  return Reported(r);
+}
+
+TrialResult Learner::Reported(TrialResult r) const {
   r.iteration = iteration_;
   r.status = status_;
   r.optimality = optimality_.total;

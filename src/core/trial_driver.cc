@@ -38,7 +38,6 @@ void TrialDriver::Reset() {
   }
   trial_ = 0;
   frozen_ = false;
-  initialized_ = false;
   runs_ = 0;
   run_cost_sum_ = 0;
   UseFallback();
@@ -86,7 +85,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.accepted = true;
     out.cost = EvaluateCost(*problem_, measured).total;
     if (learner_) out.status = learner_->status();
-  } else if (!initialized_) {
+  } else if (!learner_->initialized()) {
     // This trial ran u^0, T^0: Algorithm 1's "Initialize" (x^0, I^0, then (30)).
     if (settings_.method == Method::kMrl) {
       Trajectory predicted;
@@ -95,7 +94,6 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     } else {
       learner_->Initialize(measured, nullptr, mean_cost);
     }
-    initialized_ = true;
     out.learned = true;
     out.accepted = true;
     out.cost = learner_->nominal_cost();
