@@ -8,7 +8,7 @@ import os
 import subprocess
 import unittest
 
-from tools_test_util import ROOT, TempDirTest, run_tool
+from tools_test_util import ROOT, TempDirTest, push_scenario, run_tool
 
 HOPPER = os.environ.get("DDOC_HOPPER", "")
 LOGS = ("hops.csv", "events.csv", "trajectory.csv")
@@ -77,19 +77,7 @@ class DeterminismTest(TempDirTest):
                                         "--hops", "4"], (1, 3))
 
     def test_push_sweep_rows_do_not_depend_on_jobs(self):
-        scenario = os.path.join(self.tmp, "short_push.xml")
-        robot = os.path.join(ROOT, "models", "hopper_m12.xml")
-        with open(scenario, "w") as f:
-            f.write(f"""<ddoc_scenario name="short_push">
-  <robot mjcf="{robot}"/>
-  <model M="10" c_d="0"/>
-  <method name="alg1"/>
-  <duration hops="4"/>
-  <push time="1.0" force="10" duration="0.05"/>
-  <learning terminal="event" cyclic_value="0.99" reference="gait"/>
-  <gait speed="0.5"/>
-</ddoc_scenario>
-""")
+        scenario = push_scenario(self.tmp)
         self.sweep_twice("push_sweep", ["--scenario", scenario, "--speeds", "0.5",
                                         "--durations", "0.02", "--offsets", "0,0.3",
                                         "--methods", "alg1"], (1, 2))

@@ -51,3 +51,22 @@ class TempDirTest(unittest.TestCase):
                 self.assertEqual(r.returncode, 2, r.stderr)
                 for needle in needles:
                     self.assertIn(needle, r.stderr)
+
+
+def push_scenario(tmp, with_push=True):
+    """A short scenario: the 12 kg robot under the extended settings, one small early push."""
+    path = os.path.join(tmp, "short_push.xml")
+    robot = os.path.join(ROOT, "models", "hopper_m12.xml")
+    push = '<push time="1.0" force="10" duration="0.05"/>' if with_push else ""
+    with open(path, "w") as f:
+        f.write(f"""<ddoc_scenario name="short_push">
+  <robot mjcf="{robot}"/>
+  <model M="10" c_d="0"/>
+  <method name="alg1"/>
+  <duration hops="4"/>
+  {push}
+  <learning terminal="event" cyclic_value="0.99" reference="gait"/>
+  <gait speed="0.5"/>
+</ddoc_scenario>
+""")
+    return path
