@@ -47,7 +47,7 @@ struct ControllerConfig {
   HopperParams model;                                  ///< the (possibly inexact) analytic model
   HopperCostWeights cost_weights;                      ///< weights of (42); default Fig. 2
   NominalGaitSettings gait;                            ///< the gait u^0 is solved from
-  LearnerSettings model_learner = HopperLearnerSettings();  ///< the OC-FB solve on the model
+  LearnerSettings model_learner = HopperModelSolveSettings();  ///< the OC-FB solve on the model
   /// alpha of u^0 = Learner::ConvergedPolicy(alpha) of the model solve; 0 = nominal + feedback.
   double ocfb_alpha = 0.0;
   double dt_model = 1e-3;                ///< RK4 step of the model plant, s

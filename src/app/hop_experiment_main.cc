@@ -135,7 +135,7 @@ Experiment::Experiment(const Options& o)
   NominalGaitSettings gs;
   gs.forward_speed = o.speed;
   gait_ = FindNominalGait(model_.params(), gs);
-  LearnerSettings ls = HopperLearnerSettings();
+  LearnerSettings ls = HopperModelSolveSettings();
   ls.backward.cyclic_value = o.cyclic;
   ls.backward.terminal_event = o.event;
   Learner model_learner(problem_, ls);

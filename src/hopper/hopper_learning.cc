@@ -20,10 +20,16 @@ LearnerSettings HopperLearnerSettings() {
   s.backward.time_curvature = false;
   s.backward.cyclic_value = 0.99;
   s.backward.terminal_event = true;
-  s.alpha_initial = 0.1;
+  s.alpha_initial = 0.5;
   s.start_correction = false;
   s.restart_on_failure = true;
   s.restart_alpha = 1e-3;
+  return s;
+}
+
+LearnerSettings HopperModelSolveSettings() {
+  LearnerSettings s = HopperLearnerSettings();
+  s.alpha_initial = 0.1;
   return s;
 }
 
