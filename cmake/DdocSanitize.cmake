@@ -21,7 +21,11 @@ if(DDOC_SANITIZE)
   if(NOT CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
     message(FATAL_ERROR "DDOC_SANITIZE=ON needs GCC or clang")
   endif()
+  # UBSan's per-access pointer checks are left out: ASan traps the out-of-bounds and null
+  # accesses they catch, C++17's aligned new gives Eigen its alignment, and with them the
+  # Eigen-heavy code ran 3.4x slower (docs/reliability.md, "Sanitizer build").
   set(DDOC_SANITIZE_FLAGS -fsanitize=address,undefined -fno-sanitize-recover=undefined
+                          -fno-sanitize=alignment,null,object-size,pointer-overflow
                           -fno-omit-frame-pointer)
   add_compile_options(${DDOC_SANITIZE_FLAGS})
   add_link_options(-fsanitize=address,undefined)
