@@ -72,12 +72,15 @@ long MallocCounter::count() const { return g_allocations.load() - start_; }
 
 void* volatile g_sink = nullptr;
 
+void Escape(void* p) { g_sink = p; }
+
 bool MallocCountingWorks() {
   MallocCounter counter;
   // Through a volatile function pointer so the compiler cannot elide the pair.
   void* (*volatile allocate)(size_t) = &std::malloc;
-  g_sink = allocate(64);
-  std::free(g_sink);
+  void* p = allocate(64);
+  Escape(p);
+  std::free(p);
   return counter.count() >= 1;
 }
 

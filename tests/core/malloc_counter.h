@@ -24,6 +24,10 @@ class MallocCounter {
 /// True when the interposition works in this process (a probe allocation was counted).
 bool MallocCountingWorks();
 
+/// Stores p in a volatile sink, so the compiler cannot elide the allocation that made it (a
+/// probe allocation that is never read otherwise may be removed, and not counted).
+void Escape(void* p);
+
 }  // namespace testing
 }  // namespace ddoc
 
