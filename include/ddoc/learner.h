@@ -98,6 +98,12 @@ struct LearnerSettings {
   /// run-to-run spread of the nominal's cost estimated from the re-measurements (0 until the
   /// first one). docs/engine.md, "A nominal cost that is measured again". Default 0 (off).
   double noise_margin = 0.0;
+  /// A trial's state feedback moves from the nominal law's (the law that produced the nominal:
+  /// the accepted trial's, or SetInitialLaw's before any) at alpha = 0 to the pass's at
+  /// alpha >= alpha_initial, w = min(1, alpha / alpha_initial) of
+  /// OnlineController::BlendStateFeedback; the feed-forward and dT are (33)-(34)'s. Default
+  /// false (the pass's gains, the paper). docs/engine.md, "The trial's feedback".
+  bool blend_feedback = false;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
   BackwardPassSettings backward;         ///< (30)
@@ -232,6 +238,10 @@ class Learner {
   /// CompleteTrial (or Initialize) and NextTrial.
   void RecomputeDirection();
 
+  /// The law that produced the initial nominal (u^0), for blend_feedback before the first
+  /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.
+  void SetInitialLaw(const OnlineController* law) { initial_law_ = law; }
+
   /// Batch Algorithm 1 / mRL / OC-FB from a fixed initial state: runs `initial_policy` on both
   /// plants, then trials until convergence, line-search failure or max_trials. Pass the same
   /// object twice for Algorithm 1 (real, real) and OC-FB (model, model); (model, real) is mRL.
@@ -334,6 +344,7 @@ class Learner {
   double mu_ = 0;                     // Levenberg-Marquardt regularization of (30), (33)
   double luu_scale_ = 0;              // max |diag L_uu| seen, for the first raise of mu
   Optimality optimality_, initial_optimality_;
+  const OnlineController* initial_law_ = nullptr;  // SetInitialLaw
 };
 
 }  // namespace ddoc

@@ -6,6 +6,8 @@
 
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "ddoc/backward_pass.h"
 #include "ddoc/box_qp.h"
 #include "ddoc/policy.h"
@@ -93,6 +95,14 @@ class OnlineController : public Policy {
   /// vector per mode of that mode's state size, entries finite and >= 0; empty = as printed).
   /// Allocates; call between trials.
   void SetStateFeedbackScale(const std::vector<Vector>& scale);
+  /// Blends the loaded law's state feedback with that of `law` (loaded for the same problem):
+  /// G <- w G + (1 - w) H H_law^{-1} G_law, G the effective gain (feedback factor x K_x), with
+  /// `law` read where the nominal was at each sample: at the time since the mode's start at
+  /// which the nominal passed it (the nominal's durations; `law`'s planned durations). The
+  /// feed-forward and the dT part stay. w in [0, 1]; w = 0 gives `law`'s feedback
+  /// -H_law^{-1} G_law dx inside this law's box QP. No allocation. docs/engine.md, "The trial's
+  /// feedback".
+  void BlendStateFeedback(const OnlineController& law, double w);
 
  private:
   // Finds j with tau_j <= tau <= tau_{j+1} in mode k; returns the interpolation weight.
@@ -124,6 +134,8 @@ class OnlineController : public Policy {
   Matrix H_;       // m x m
   Vector lo_, hi_; // m
   Vector du_;      // m
+  Matrix gain_;    // m x n_max: BlendStateFeedback's H_law^{-1} G_law
+  Eigen::LLT<Matrix> llt_;  // m x m: BlendStateFeedback's factor of H_law
   // Per-trial bookkeeping.
   double du_integral_ = 0;
   double last_tau_ = 0;

@@ -97,6 +97,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.remeasure) learner.remeasure_nominal = *l.remeasure;
   if (l.noise_margin) learner.noise_margin = *l.noise_margin;
   if (l.hops_per_trial) config.driver.runs_per_trial = *l.hops_per_trial;
+  if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   // The regularization mu, the cyclic value and the terminal condition apply to both learners
   // (the model solve of u^0 and the robot's); mu is the floor of the one regularization of the
   // online QP (33) and the Riccati pass.

@@ -100,7 +100,8 @@ const std::vector<ElementSpec>& Elements() {
         Number("alpha_initial", {0.0, 1.0, true, false}), Number("cyclic_value", Closed(0, 1)),
         Text("terminal"), Text("reference"), Text("alpha_after_accept"), Integer("delta_i", 1),
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
-        Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1)}},
+        Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
+        Text("blend_feedback")}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"gait", false,
@@ -284,6 +285,7 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   if (auto v = GetChoice(path, e, "remeasure", "off", "on")) l->remeasure = *v == "on";
   l->noise_margin = GetNumber(path, e, "noise_margin");
   l->hops_per_trial = GetInteger(path, e, "hops_per_trial");
+  if (auto v = GetChoice(path, e, "blend_feedback", "off", "on")) l->blend_feedback = *v == "on";
 }
 
 // <push time=.../> or <push hop=... phase=.../>, with force and duration.

@@ -59,6 +59,7 @@ struct LearningOverrides {
   std::optional<bool> remeasure;        // remeasure="on": LearnerSettings::remeasure_nominal
   std::optional<double> noise_margin;   // LearnerSettings::noise_margin (with remeasure="on")
   std::optional<int> hops_per_trial;    // TrialDriverSettings::runs_per_trial, >= 1
+  std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
 };
 
 /// <experiment .../>: settings that are NOT the paper and not defaults (docs/experiments.md).

@@ -319,6 +319,15 @@ OnlineController& Learner::NextTrial() {
   switching_step_ = SolveSwitchingTimeUpdate(*problem_, nominal_.T, pass_.P22_initial(),
                                              pass_.p2_initial(), alpha_, settings_.switching);
   controllers_[active_].Load(nominal_, pass_, alpha_, switching_step_.dT);
+  if (settings_.blend_feedback) {
+    // The law that produced the nominal: the accepted trial's (another slot), else u^0.
+    const OnlineController* nominal_law =
+        accepted_ >= 0 ? &controllers_[accepted_] : initial_law_;
+    if (nominal_law != nullptr && nominal_law->loaded()) {
+      controllers_[active_].BlendStateFeedback(*nominal_law,
+                                               std::min(1.0, alpha_ / settings_.alpha_initial));
+    }
+  }
   trial_pending_ = true;
   return controllers_[active_];
 }

@@ -69,6 +69,8 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   lo_.setZero(m_);
   hi_.setZero(m_);
   du_.setZero(m_);
+  gain_.setZero(m_, n_max_);
+  llt_ = Eigen::LLT<Matrix>(m_);
   loaded_ = false;
 }
 
@@ -142,6 +144,63 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   }
   loaded_ = true;
   BeginTrial();
+}
+
+void OnlineController::BlendStateFeedback(const OnlineController& law, double w) {
+  const char* what = "OnlineController::BlendStateFeedback: ";
+  if (!loaded_ || !law.loaded_) {
+    throw InvalidArgument(std::string(what) + "both laws must be loaded");
+  }
+  if (law.K_ != K_ || law.m_ != m_) {
+    throw InvalidArgument(std::string(what) + "the other law has " + std::to_string(law.K_) +
+                          " modes and " + std::to_string(law.m_) + " inputs, this one " +
+                          std::to_string(K_) + " and " + std::to_string(m_));
+  }
+  if (!(w >= 0.0 && w <= 1.0)) {
+    throw InvalidArgument(std::string(what) + "w = " + std::to_string(w) +
+                          ", expected in [0, 1]");
+  }
+  if (w == 1.0) return;
+  // A law whose state feedback is scaled by alpha = 0 (kLyapunov) has none to replace.
+  if (!(feedback_factor_ > 0.0)) return;
+  for (int k = 0; k < K_; ++k) {
+    const int n = layout_.dim(k);
+    if (law.layout_.dim(k) != n) {
+      throw InvalidArgument(std::string(what) + "mode " + std::to_string(k) + " has state size " +
+                            std::to_string(law.layout_.dim(k)) + " in the other law, " +
+                            std::to_string(n) + " in this one");
+    }
+    const int off = law.layout_.offset(k);
+    const int N = law.layout_.count(k);
+    int j = 0;
+    for (int i = 0; i < layout_.count(k); ++i) {
+      const int s = layout_.index(k, i);
+      // The nominal passed sample s at t = (tau - k) D_k^i (its own durations); `law` acted
+      // there at k + t / D_k(law), its planned duration. That gain belongs to x^i(tau).
+      const double t = (tau_(s) - k) * (nominal_T_(k) - (k == 0 ? 0.0 : nominal_T_(k - 1)));
+      const double tau = k + std::min(std::max(t / law.planned_durations_(k), 0.0), 1.0);
+      while (j < N - 2 && law.tau_(off + j + 1) < tau) ++j;
+      const int s0 = off + j, s1 = off + j + 1;
+      const double span = law.tau_(s1) - law.tau_(s0);
+      const double a = span > 0 ? std::min(std::max((tau - law.tau_(s0)) / span, 0.0), 1.0) : 1.0;
+      H_ = (1.0 - a) * Eigen::Map<const Matrix>(law.huu_.col(s0).data(), m_, m_) +
+           a * Eigen::Map<const Matrix>(law.huu_.col(s1).data(), m_, m_);
+      auto g = gain_.leftCols(n);
+      g = ((1.0 - a) * law.feedback_factor_) *
+              Eigen::Map<const Matrix>(law.Kx_.col(s0).data(), m_, n) +
+          (a * law.feedback_factor_) * Eigen::Map<const Matrix>(law.Kx_.col(s1).data(), m_, n);
+      llt_.compute(H_);
+      if (llt_.info() != Eigen::Success) {
+        throw InvalidArgument(std::string(what) + "the other law's H is not positive definite in mode " +
+                              std::to_string(k));
+      }
+      llt_.solveInPlace(g);  // H_law^{-1} G_law
+      Eigen::Map<Matrix> K(Kx_.col(s).data(), m_, n);
+      K *= w;
+      K.noalias() += ((1.0 - w) / feedback_factor_) *
+                     (Eigen::Map<const Matrix>(huu_.col(s).data(), m_, m_) * g);
+    }
+  }
 }
 
 void OnlineController::BeginTrial() {

@@ -35,6 +35,8 @@ void TrialDriver::Reset() {
   learner_.reset();
   if (settings_.method != Method::kOcfb) {
     learner_ = std::make_unique<Learner>(*problem_, settings_.learner);
+    // blend_feedback before the first accepted trial: u^0's own feedback, when it has one.
+    learner_->SetInitialLaw(dynamic_cast<const OnlineController*>(fallback_));
   }
   trial_ = 0;
   frozen_ = false;

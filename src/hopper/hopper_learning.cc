@@ -24,12 +24,14 @@ LearnerSettings HopperLearnerSettings() {
   s.start_correction = false;
   s.restart_on_failure = true;
   s.restart_alpha = 1e-3;
+  s.blend_feedback = true;
   return s;
 }
 
 LearnerSettings HopperModelSolveSettings() {
   LearnerSettings s = HopperLearnerSettings();
   s.alpha_initial = 0.1;
+  s.blend_feedback = false;  // every trial starts from the same state: nothing to blend for
   return s;
 }
 

@@ -174,6 +174,15 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   EXPECT_FALSE(l.remeasure_nominal);  // the hopper's default
   EXPECT_EQ(l.noise_margin, 0.0);
   ExpectError(Fill(fmt, "remeasure='yes'"), {"<learning>", "remeasure=\"yes\"", "off or on"});
+  // blend_feedback: on in the hopper's default, off in the paper preset and the model solve.
+  plugin::ControllerConfig c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
+  EXPECT_TRUE(c.driver.learner.blend_feedback);
+  EXPECT_FALSE(c.model_learner.blend_feedback);
+  EXPECT_FALSE(ControllerConfigFor(LoadScenario(Write(Fill(fmt, "preset='paper'"))), HopperParams())
+                   .driver.learner.blend_feedback);
+  s = LoadScenario(Write(Fill(fmt, "blend_feedback='off'")));
+  EXPECT_FALSE(ControllerConfigFor(s, HopperParams()).driver.learner.blend_feedback);
+  ExpectError(Fill(fmt, "blend_feedback='1'"), {"<learning>", "blend_feedback=\"1\"", "off or on"});
   ExpectError(Fill(fmt, "noise_margin='-1'"), {"noise_margin"});
   s = LoadScenario(Write(Fill(fmt, "hops_per_trial='3'")));
   EXPECT_EQ(ControllerConfigFor(s, HopperParams()).driver.runs_per_trial, 3);

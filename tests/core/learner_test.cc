@@ -353,6 +353,59 @@ TEST(Learner, AcceptanceComparesTrialsAsIfFromTheSameStart) {
   }
 }
 
+// blend_feedback: the law at alpha -> 0 is the law that produced the nominal. u^0 here is
+// "zero input + the feedback of a pass with mu = 2" (its gains differ from the learner's, mu =
+// 0); its run from lq.x0 is the nominal. On this linear plant u^0 from another start x1 is
+// u^i(t) + the feedback of u^0 on x - x^i(t), so the blended law at small alpha must reproduce
+// u^0's inputs from x1 up to O(alpha); the pass's own gains do not.
+TEST(Learner, BlendedFeedbackAtSmallAlphaIsTheNominalLaw) {
+  FineLq f;
+  ModelPlant& plant = f.plant;
+  LearnerSettings stiff = FineLq::Settings(false);
+  stiff.regularization_min = 2.0;
+  Learner model(f.p.problem, stiff);
+  model.Initialize(f.nominal);
+  OnlineController u0 = model.ConvergedPolicy(0.0);
+  Trajectory measured, reference, trial;
+  plant.Run(f.lq.x0, u0, &measured);
+  const Vector x1 = f.lq.x0 + Eigen::Vector2d(0.5, 0.5);
+  plant.Run(x1, u0, &reference);
+  // Largest input difference from u^0's run from x1, over mode 0 (same dt, same start).
+  auto distance = [&](const Trajectory& t) {
+    const int N = std::min(t.modes[0].num_samples(), reference.modes[0].num_samples());
+    return (t.modes[0].u.leftCols(N) - reference.modes[0].u.leftCols(N)).cwiseAbs().maxCoeff();
+  };
+  const double scale = reference.modes[0].u.cwiseAbs().maxCoeff();
+  double at_full_step[2] = {0, 0};
+  double at_small_step[2] = {0, 0};
+  for (const bool blend : {false, true}) {
+    SCOPED_TRACE(blend ? "blended" : "the pass's gains");
+    LearnerSettings settings = RejectEveryTrial();
+    settings.max_samples = 20000;
+    settings.start_correction = false;
+    settings.alpha_min = 1e-4;
+    settings.blend_feedback = blend;
+    Learner learner(f.p.problem, settings);
+    learner.SetInitialLaw(&u0);
+    learner.Initialize(measured);
+    plant.Run(x1, learner.NextTrial(), &trial);
+    at_full_step[blend] = distance(trial);
+    ASSERT_FALSE(learner.CompleteTrial(trial).accepted);  // every trial is rejected: alpha halves
+    for (int i = 0; i < 9; ++i) {
+      plant.Run(f.lq.x0, learner.NextTrial(), &trial);
+      ASSERT_FALSE(learner.CompleteTrial(trial).accepted);
+    }
+    ASSERT_DOUBLE_EQ(learner.alpha(), 1.0 / 1024);
+    plant.Run(x1, learner.NextTrial(), &trial);
+    at_small_step[blend] = distance(trial);
+  }
+  // At alpha = alpha_initial (w = 1) the blend changes nothing.
+  EXPECT_EQ(at_full_step[1], at_full_step[0]);
+  EXPECT_GT(at_small_step[0], 0.05 * scale) << "u^0's gains differ from the pass's";
+  // O(alpha): the blended law's distance halves with alpha (about 9e-3 at 1/1024 here).
+  EXPECT_LT(at_small_step[1], 0.02 * at_small_step[0]);
+}
+
 // restart_on_failure: a learner whose every trial is rejected does not terminate; when alpha
 // drops below alpha_min the line search restarts around the same nominal. Batch Solve still
 // terminates.

@@ -284,6 +284,67 @@ TEST(OnlineController, AccumulatesDuSquaredOverTau) {
   EXPECT_NEAR(ctrl.du_squared_integral(), measured, 1e-9 * (1 + measured));
 }
 
+// BlendStateFeedback against an independent (34): the gain becomes w G + (1 - w) H H_o^{-1} G_o,
+// with the other law's H_o and G_o (another pass: mu = 2) interpolated at the time since the
+// mode's start at which the nominal passed the sample, mapped through the other law's planned
+// duration (its dT differs); the feed-forward and the dT part are this law's.
+TEST(OnlineController, BlendStateFeedbackMixesInTheOtherLawsFeedback) {
+  ControlSetup s(3, 4, 3, 1.0, BackwardEquation::kRiccati, 0.3);
+  BackwardPass other;
+  other.Allocate(s.problem, s.nominal.total_samples(), s.pass.settings());
+  other.Run(s.nominal, 2.0);
+  Vector dT(2), dT_other(2);
+  dT << 0.02, -0.01;
+  dT_other << 0.05, -0.04;
+  OnlineController law, ctrl;
+  law.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  law.Load(s.nominal, other, 0.4, dT_other);
+  const double alpha = 0.7, w = 0.3;
+  // The other law's effective gain H_o^{-1} G_o at tau (linear interpolation of both).
+  auto other_gain = [&](int k, double tau) {
+    const int n = s.sys->state_dim(k);
+    int j = 0;
+    while (j + 2 < other.num_samples(k) && other.tau(k, j + 1) < tau) ++j;
+    const double a = (tau - other.tau(k, j)) / (other.tau(k, j + 1) - other.tau(k, j));
+    const Matrix H = (1 - a) * Matrix(other.Hessian(k, j)) + a * Matrix(other.Hessian(k, j + 1));
+    const Matrix G = (1 - a) * Matrix(other.Gain(k, j).leftCols(n)) +
+                     a * Matrix(other.Gain(k, j + 1).leftCols(n));
+    return Matrix(H.llt().solve(G));
+  };
+  auto expected_b = [&](double weight) {
+    return [&, weight](int k, int j, const Vector& dx) {
+      const int n = s.sys->state_dim(k);
+      const double D = k == 0 ? s.nominal.T(0) : s.nominal.T(1) - s.nominal.T(0);
+      const double t = (s.pass.tau(k, j) - k) * D;
+      const double tau_other = k + std::min(1.0, t / law.PlannedDuration(k));
+      const Matrix G = s.pass.Gain(k, j).leftCols(n);
+      const Matrix G_blend =
+          weight * G + (1 - weight) * Matrix(s.pass.Hessian(k, j)) * other_gain(k, tau_other);
+      return Vector(IndependentB(s, k, j, dx, dT, alpha) + (G_blend - G) * dx);
+    };
+  };
+  EXPECT_NE(law.PlannedDuration(0), s.nominal.T(0));  // the mapping is exercised
+  for (const double weight : {1.0, w, 0.0}) {
+    SCOPED_TRACE(weight);
+    ctrl.Load(s.nominal, s.pass, alpha, dT);
+    ctrl.BlendStateFeedback(law, weight);
+    ExpectStepsMatchQp(s, ctrl, 9, expected_b(weight));
+  }
+  // Errors name what is wrong; the loaded law is not changed by a rejected call.
+  ExpectThrowsWith([&] { ctrl.BlendStateFeedback(law, 1.5); }, "BlendStateFeedback: w = 1.5");
+  ExpectThrowsWith([&] { ctrl.BlendStateFeedback(law, std::nan("")); }, "w = nan");
+  OnlineController unloaded;
+  unloaded.Allocate(s.problem, s.nominal.total_samples());
+  ExpectThrowsWith([&] { ctrl.BlendStateFeedback(unloaded, 0.5); }, "must be loaded");
+  ControlSetup two_inputs(2);
+  OnlineController narrow;
+  narrow.Allocate(two_inputs.problem, two_inputs.nominal.total_samples());
+  narrow.Load(two_inputs.nominal, two_inputs.pass, 0.5, Vector::Zero(2));
+  ExpectThrowsWith([&] { ctrl.BlendStateFeedback(narrow, 0.5); }, "2 inputs, this one 2 and 3");
+  ExpectStepsMatchQp(s, ctrl, 9, expected_b(0.0));
+}
+
 TEST(OnlineController, StepDoesNotAllocate) {
   ASSERT_TRUE(MallocCountingWorks());
   ControlSetup s(4, 14, 10);  // hopper-like sizes
@@ -295,13 +356,18 @@ TEST(OnlineController, StepDoesNotAllocate) {
   Vector x1 = s.nominal.modes[1].x.col(0) + Vector::Constant(10, -0.3);
   ctrl.BeginTrial();
   const Vector zero = Vector::Zero(2);
+  OnlineController other;
+  other.Allocate(s.problem, 2000);
+  other.Load(s.nominal, s.pass, 0.0, zero);
   MallocCounter counter;
   for (int i = 0; i < 300; ++i) ctrl.Step(0, i * 1e-3, x0, u);
   for (int i = 0; i < 300; ++i) ctrl.Step(1, i * 1e-3, x1, u);
   EXPECT_EQ(counter.count(), 0) << "Step";
-  // Reloading between trials does not allocate either.
+  // Reloading between trials does not allocate either, nor does blending in another law.
   ctrl.Load(s.nominal, s.pass, 0.25, zero);
   EXPECT_EQ(counter.count(), 0) << "Load";
+  ctrl.BlendStateFeedback(other, 0.5);
+  EXPECT_EQ(counter.count(), 0) << "BlendStateFeedback";
 }
 
 }  // namespace

@@ -115,6 +115,44 @@ TEST(TrialDriver, AllThreeMethodsAgreeWithAnExactModel) {
   EXPECT_NEAR(last[1], last[2], 1e-6 * last[2]);
 }
 
+// blend_feedback through the driver: before any accepted trial the learner's nominal law is the
+// fallback u^0 (an OnlineController here, with mu = 2 gains), so ten rejections later the trial
+// at alpha = 1/1024 from another start runs u^0's feedback: its inputs follow u^0's from there.
+TEST(TrialDriver, BlendedFeedbackStartsFromTheFallbacksGains) {
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  LearnerSettings stiff = LqTestSettings();
+  stiff.regularization_min = 2.0;
+  Learner model(p.problem, stiff);
+  FunctionPolicy zero = ZeroInputPolicy();
+  Trajectory nominal, reference, measured;
+  plant.Run(lq.x0, zero, &nominal);
+  model.Initialize(nominal);
+  OnlineController& u0 = model.ConvergedPolicy(0.0);
+  const Vector x1 = lq.x0 + Eigen::Vector2d(0.5, 0.5);
+  plant.Run(x1, u0, &reference);
+  double distance[2] = {0, 0};
+  for (const bool blend : {false, true}) {
+    TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+    settings.learner.c = 1e6;  // every trial is rejected; alpha halves from 1
+    settings.learner.gamma = 0.5;
+    settings.learner.interpolate_backtracking = false;
+    settings.learner.alpha_min = 1e-4;
+    settings.learner.start_correction = false;
+    settings.learner.blend_feedback = blend;
+    TrialDriver driver(p.problem, settings, u0);
+    for (int i = 0; i < 11; ++i) driver.RunTrial(plant, lq.x0, &measured);
+    ASSERT_DOUBLE_EQ(driver.learner()->alpha(), 1.0 / 1024);
+    plant.Run(x1, driver.law(), &measured);
+    const int N = std::min(measured.modes[0].num_samples(), reference.modes[0].num_samples());
+    distance[blend] =
+        (measured.modes[0].u.leftCols(N) - reference.modes[0].u.leftCols(N)).cwiseAbs().maxCoeff();
+  }
+  EXPECT_GT(distance[0], 0.1);
+  EXPECT_LT(distance[1], 0.02 * distance[0]);
+}
+
 TEST_F(TrialDriverTest, OnlineTrialsStartWhereTheLastOneEnded) {
   // Identity reset: the next trial starts at the last measured state.
   std::vector<Vector> ends;

@@ -23,11 +23,12 @@ namespace ddoc {
 /// by 1/gamma with each accepted trial); no start correction;
 /// regularization_min = 0.01; RK4 pass with PSD switching Hessians, box_aware = false,
 /// time_curvature = false, the periodic value cyclic_value = 0.99 and the terminal condition
-/// through the takeoff event (terminal_event).
+/// through the takeoff event (terminal_event); a trial's feedback blends from the nominal law's
+/// to the pass's (blend_feedback).
 LearnerSettings HopperLearnerSettings();
 
 /// The model solve of u^0 (SolveFromGait, every method's initial law and OC-FB's law):
-/// HopperLearnerSettings() with alpha_initial = 0.1.
+/// HopperLearnerSettings() with alpha_initial = 0.1 and blend_feedback = false.
 LearnerSettings HopperModelSolveSettings();
 
 /// The `paper` preset on the hopper: LearnerSettings::Paper() with the hopper's scales
