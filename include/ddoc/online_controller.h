@@ -100,8 +100,9 @@ class OnlineController : public Policy {
   /// `law` read where the nominal was at each sample: at the time since the mode's start at
   /// which the nominal passed it (the nominal's durations; `law`'s planned durations). The
   /// feed-forward and the dT part stay. w in [0, 1]; w = 0 gives `law`'s feedback
-  /// -H_law^{-1} G_law dx inside this law's box QP. No allocation. docs/engine.md, "The trial's
-  /// feedback".
+  /// -H_law^{-1} G_law dx inside this law's box QP; a sample where H_law is not positive
+  /// definite keeps this law's gain. Bad input throws before anything changes. No allocation.
+  /// docs/engine.md, "The trial's feedback".
   void BlendStateFeedback(const OnlineController& law, double w);
 
  private:

@@ -160,16 +160,18 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
     throw InvalidArgument(std::string(what) + "w = " + std::to_string(w) +
                           ", expected in [0, 1]");
   }
+  for (int k = 0; k < K_; ++k) {  // every check before anything changes
+    if (law.layout_.dim(k) != layout_.dim(k)) {
+      throw InvalidArgument(std::string(what) + "mode " + std::to_string(k) + " has state size " +
+                            std::to_string(law.layout_.dim(k)) + " in the other law, " +
+                            std::to_string(layout_.dim(k)) + " in this one");
+    }
+  }
   if (w == 1.0) return;
   // A law whose state feedback is scaled by alpha = 0 (kLyapunov) has none to replace.
   if (!(feedback_factor_ > 0.0)) return;
   for (int k = 0; k < K_; ++k) {
     const int n = layout_.dim(k);
-    if (law.layout_.dim(k) != n) {
-      throw InvalidArgument(std::string(what) + "mode " + std::to_string(k) + " has state size " +
-                            std::to_string(law.layout_.dim(k)) + " in the other law, " +
-                            std::to_string(n) + " in this one");
-    }
     const int off = law.layout_.offset(k);
     const int N = law.layout_.count(k);
     int j = 0;
@@ -182,7 +184,8 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
       while (j < N - 2 && law.tau_(off + j + 1) < tau) ++j;
       const int s0 = off + j, s1 = off + j + 1;
       const double span = law.tau_(s1) - law.tau_(s0);
-      const double a = span > 0 ? std::min(std::max((tau - law.tau_(s0)) / span, 0.0), 1.0) : 1.0;
+      const double a =
+          span > 0 ? std::min(std::max((tau - law.tau_(s0)) / span, 0.0), 1.0) : 1.0;
       H_ = (1.0 - a) * Eigen::Map<const Matrix>(law.huu_.col(s0).data(), m_, m_) +
            a * Eigen::Map<const Matrix>(law.huu_.col(s1).data(), m_, m_);
       auto g = gain_.leftCols(n);
@@ -190,10 +193,7 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
               Eigen::Map<const Matrix>(law.Kx_.col(s0).data(), m_, n) +
           (a * law.feedback_factor_) * Eigen::Map<const Matrix>(law.Kx_.col(s1).data(), m_, n);
       llt_.compute(H_);
-      if (llt_.info() != Eigen::Success) {
-        throw InvalidArgument(std::string(what) + "the other law's H is not positive definite in mode " +
-                              std::to_string(k));
-      }
+      if (llt_.info() != Eigen::Success) continue;  // no feedback to take: keep this law's
       llt_.solveInPlace(g);  // H_law^{-1} G_law
       Eigen::Map<Matrix> K(Kx_.col(s).data(), m_, n);
       K *= w;

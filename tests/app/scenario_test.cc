@@ -175,7 +175,8 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   EXPECT_EQ(l.noise_margin, 0.0);
   ExpectError(Fill(fmt, "remeasure='yes'"), {"<learning>", "remeasure=\"yes\"", "off or on"});
   // blend_feedback: on in the hopper's default, off in the paper preset and the model solve.
-  plugin::ControllerConfig c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
+  plugin::ControllerConfig c =
+      ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
   EXPECT_TRUE(c.driver.learner.blend_feedback);
   EXPECT_FALSE(c.model_learner.blend_feedback);
   EXPECT_FALSE(ControllerConfigFor(LoadScenario(Write(Fill(fmt, "preset='paper'"))), HopperParams())

@@ -342,6 +342,12 @@ TEST(OnlineController, BlendStateFeedbackMixesInTheOtherLawsFeedback) {
   narrow.Allocate(two_inputs.problem, two_inputs.nominal.total_samples());
   narrow.Load(two_inputs.nominal, two_inputs.pass, 0.5, Vector::Zero(2));
   ExpectThrowsWith([&] { ctrl.BlendStateFeedback(narrow, 0.5); }, "2 inputs, this one 2 and 3");
+  ControlSetup wide(3, 5, 3);
+  OnlineController other_states;
+  other_states.Allocate(wide.problem, wide.nominal.total_samples());
+  other_states.Load(wide.nominal, wide.pass, 0.5, Vector::Zero(2));
+  ExpectThrowsWith([&] { ctrl.BlendStateFeedback(other_states, 0.5); },
+                   "mode 0 has state size 5 in the other law, 4 in this one");
   ExpectStepsMatchQp(s, ctrl, 9, expected_b(0.0));
 }
 
