@@ -106,8 +106,13 @@ class OnlineController : public Policy {
   void BlendStateFeedback(const OnlineController& law, double w);
 
  private:
-  // Finds j with tau_j <= tau <= tau_{j+1} in mode k; returns the interpolation weight.
+  // From the interval *j of mode k (in, out), finds j with tau_j <= tau <= tau_{j+1}; returns
+  // the linear weight of sample j + 1, clamped to [0, 1].
+  double Interval(int k, double tau, int* j) const;
+  // Interval from Step's cursor; the weight follows settings().interpolate.
   double Locate(int k, double tau, int* j);
+  // *H = (1 - a) H(s0) + a H(s1), the global samples' H = L_uu + mu I.
+  void InterpolateHessian(int s0, int s1, double a, Matrix* H) const;
   void Accumulate(int k, double tau);
 
   const Problem* problem_ = nullptr;

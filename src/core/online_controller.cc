@@ -172,22 +172,17 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
   if (!(feedback_factor_ > 0.0)) return;
   for (int k = 0; k < K_; ++k) {
     const int n = layout_.dim(k);
-    const int off = law.layout_.offset(k);
-    const int N = law.layout_.count(k);
+    const double nominal_duration = nominal_T_(k) - (k == 0 ? 0.0 : nominal_T_(k - 1));
     int j = 0;
     for (int i = 0; i < layout_.count(k); ++i) {
       const int s = layout_.index(k, i);
       // The nominal passed sample s at t = (tau - k) D_k^i (its own durations); `law` acted
       // there at k + t / D_k(law), its planned duration. That gain belongs to x^i(tau).
-      const double t = (tau_(s) - k) * (nominal_T_(k) - (k == 0 ? 0.0 : nominal_T_(k - 1)));
+      const double t = (tau_(s) - k) * nominal_duration;
       const double tau = k + std::min(std::max(t / law.planned_durations_(k), 0.0), 1.0);
-      while (j < N - 2 && law.tau_(off + j + 1) < tau) ++j;
-      const int s0 = off + j, s1 = off + j + 1;
-      const double span = law.tau_(s1) - law.tau_(s0);
-      const double a =
-          span > 0 ? std::min(std::max((tau - law.tau_(s0)) / span, 0.0), 1.0) : 1.0;
-      H_ = (1.0 - a) * Eigen::Map<const Matrix>(law.huu_.col(s0).data(), m_, m_) +
-           a * Eigen::Map<const Matrix>(law.huu_.col(s1).data(), m_, m_);
+      const double a = law.Interval(k, tau, &j);
+      const int s0 = law.layout_.index(k, j), s1 = s0 + 1;
+      law.InterpolateHessian(s0, s1, a, &H_);
       auto g = gain_.leftCols(n);
       g = ((1.0 - a) * law.feedback_factor_) *
               Eigen::Map<const Matrix>(law.Kx_.col(s0).data(), m_, n) +
@@ -214,18 +209,28 @@ void OnlineController::BeginTrial() {
   du_.setZero();
 }
 
-double OnlineController::Locate(int k, double tau, int* j_out) {
+double OnlineController::Interval(int k, double tau, int* j_inout) const {
   const int off = layout_.offset(k);
   const int N = layout_.count(k);
-  int j = std::min(cursor_[k], N - 2);
+  int j = std::min(*j_inout, N - 2);
   while (j > 0 && tau_(off + j) > tau) --j;
   while (j < N - 2 && tau_(off + j + 1) < tau) ++j;
-  cursor_[k] = j;
-  *j_out = j;
+  *j_inout = j;
   const double span = tau_(off + j + 1) - tau_(off + j);
-  if (!settings_.interpolate) return tau >= tau_(off + j + 1) ? 1.0 : 0.0;
-  double w = span > 0 ? (tau - tau_(off + j)) / span : 1.0;
+  const double w = span > 0 ? (tau - tau_(off + j)) / span : 1.0;
   return std::min(std::max(w, 0.0), 1.0);
+}
+
+double OnlineController::Locate(int k, double tau, int* j_out) {
+  const double w = Interval(k, tau, &cursor_[k]);
+  *j_out = cursor_[k];
+  if (!settings_.interpolate) return tau >= tau_(layout_.index(k, *j_out) + 1) ? 1.0 : 0.0;
+  return w;
+}
+
+void OnlineController::InterpolateHessian(int s0, int s1, double a, Matrix* H) const {
+  *H = (1.0 - a) * Eigen::Map<const Matrix>(huu_.col(s0).data(), m_, m_) +
+       a * Eigen::Map<const Matrix>(huu_.col(s1).data(), m_, m_);
 }
 
 void OnlineController::Accumulate(int k, double tau) {
@@ -280,8 +285,7 @@ void OnlineController::Step(int k, double t_since_mode_start, const ConstVectorR
   b_.noalias() += ((1.0 - w) * feedback_factor_) * K0 * dx;
   b_.noalias() += (w * feedback_factor_) * K1 * dx;
   // H = L_uu(tau) + mu I, as the backward pass assumed.
-  H_ = (1.0 - w) * Eigen::Map<const Matrix>(huu_.col(s0).data(), m_, m_) +
-       w * Eigen::Map<const Matrix>(huu_.col(s1).data(), m_, m_);
+  InterpolateHessian(s0, s1, w, &H_);
   lo_ = umin - unom_;
   hi_ = umax - unom_;
   // The nominal can sit slightly outside the box (interpolation, measured inputs).

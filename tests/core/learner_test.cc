@@ -361,20 +361,13 @@ TEST(Learner, AcceptanceComparesTrialsAsIfFromTheSameStart) {
 TEST(Learner, BlendedFeedbackAtSmallAlphaIsTheNominalLaw) {
   FineLq f;
   ModelPlant& plant = f.plant;
-  LearnerSettings stiff = FineLq::Settings(false);
-  stiff.regularization_min = 2.0;
-  Learner model(f.p.problem, stiff);
-  model.Initialize(f.nominal);
-  OnlineController u0 = model.ConvergedPolicy(0.0);
+  OnlineController u0 = StiffFeedbackLaw(f.p.problem, f.nominal);
   Trajectory measured, reference, trial;
   plant.Run(f.lq.x0, u0, &measured);
   const Vector x1 = f.lq.x0 + Eigen::Vector2d(0.5, 0.5);
   plant.Run(x1, u0, &reference);
-  // Largest input difference from u^0's run from x1, over mode 0 (same dt, same start).
-  auto distance = [&](const Trajectory& t) {
-    const int N = std::min(t.modes[0].num_samples(), reference.modes[0].num_samples());
-    return (t.modes[0].u.leftCols(N) - reference.modes[0].u.leftCols(N)).cwiseAbs().maxCoeff();
-  };
+  // Distance from u^0's run from x1.
+  auto distance = [&](const Trajectory& t) { return MaxInputDifferenceInMode0(t, reference); };
   const double scale = reference.modes[0].u.cwiseAbs().maxCoeff();
   double at_full_step[2] = {0, 0};
   double at_small_step[2] = {0, 0};

@@ -4,6 +4,8 @@
 #ifndef DDOC_TESTS_CORE_TWO_MODE_LQ_H_
 #define DDOC_TESTS_CORE_TWO_MODE_LQ_H_
 
+#include <algorithm>
+
 #include "ddoc/learner.h"
 #include "ddoc/policy.h"
 #include "ddoc/problem.h"
@@ -65,6 +67,23 @@ inline LearnerSettings LqTestSettings() {
 inline FunctionPolicy ZeroInputPolicy() {
   return FunctionPolicy(Eigen::Vector2d(1.0, 1.0),
                         [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
+}
+
+// blend_feedback tests: u^0 = the inputs of `nominal` plus the feedback of a pass with mu = 2
+// around it, a law whose gains differ from those of a learner at mu = 0.
+inline OnlineController StiffFeedbackLaw(const Problem& problem, const Trajectory& nominal) {
+  LearnerSettings s = LqTestSettings();
+  s.max_samples = 20000;
+  s.regularization_min = 2.0;
+  Learner model(problem, s);
+  model.Initialize(nominal);
+  return model.ConvergedPolicy(0.0);
+}
+
+// The largest input difference of two runs over mode 0's common samples (same start and dt).
+inline double MaxInputDifferenceInMode0(const Trajectory& a, const Trajectory& b) {
+  const int N = std::min(a.modes[0].num_samples(), b.modes[0].num_samples());
+  return (a.modes[0].u.leftCols(N) - b.modes[0].u.leftCols(N)).cwiseAbs().maxCoeff();
 }
 
 }  // namespace testing
