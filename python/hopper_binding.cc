@@ -56,6 +56,7 @@ const HopColumn kHopColumns[] = {
     {"start_shift", false, [](const HopReport& h) { return h.start_shift; }},
     {"restarted", true, [](const HopReport& h) { return h.restarted ? 1.0 : 0.0; }},
     {"remeasured", true, [](const HopReport& h) { return h.remeasured ? 1.0 : 0.0; }},
+    {"learner_cost", false, [](const HopReport& h) { return h.learner_cost; }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 

@@ -98,6 +98,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.noise_margin) learner.noise_margin = *l.noise_margin;
   if (l.hops_per_trial) config.driver.runs_per_trial = *l.hops_per_trial;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
+  if (l.start_correction) learner.start_correction = *l.start_correction;
+  if (l.restart_alpha) learner.restart_alpha = *l.restart_alpha;
   // The regularization mu, the cyclic value and the terminal condition apply to both learners
   // (the model solve of u^0 and the robot's); mu is the floor of the one regularization of the
   // online QP (33) and the Riccati pass.

@@ -101,7 +101,8 @@ const std::vector<ElementSpec>& Elements() {
         Text("terminal"), Text("reference"), Text("alpha_after_accept"), Integer("delta_i", 1),
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
-        Text("blend_feedback")}},
+        Text("blend_feedback"), Text("start_correction"),
+        Number("restart_alpha", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"gait", false,
@@ -286,6 +287,10 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   l->noise_margin = GetNumber(path, e, "noise_margin");
   l->hops_per_trial = GetInteger(path, e, "hops_per_trial");
   if (auto v = GetChoice(path, e, "blend_feedback", "off", "on")) l->blend_feedback = *v == "on";
+  if (auto v = GetChoice(path, e, "start_correction", "off", "on")) {
+    l->start_correction = *v == "on";
+  }
+  l->restart_alpha = GetNumber(path, e, "restart_alpha");
 }
 
 // <push time=.../> or <push hop=... phase=.../>, with force and duration.

@@ -60,6 +60,8 @@ struct LearningOverrides {
   std::optional<double> noise_margin;   // LearnerSettings::noise_margin (with remeasure="on")
   std::optional<int> hops_per_trial;    // TrialDriverSettings::runs_per_trial, >= 1
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
+  std::optional<bool> start_correction;  // "on"/"off": LearnerSettings::start_correction
+  std::optional<double> restart_alpha;   // LearnerSettings::restart_alpha, in (0, 1]
 };
 
 /// <experiment .../>: settings that are NOT the paper and not defaults (docs/experiments.md).

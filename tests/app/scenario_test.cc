@@ -191,6 +191,17 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
                 .driver.runs_per_trial,
             1);
   ExpectError(Fill(fmt, "hops_per_trial='0'"), {"hops_per_trial", ">= 1"});
+  // start_correction (off in the hopper's default) and restart_alpha (1e-3 there).
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
+  EXPECT_FALSE(c.driver.learner.start_correction);
+  EXPECT_DOUBLE_EQ(c.driver.learner.restart_alpha, 1e-3);
+  c = ControllerConfigFor(
+      LoadScenario(Write(Fill(fmt, "start_correction='on' restart_alpha='0.25'"))), HopperParams());
+  EXPECT_TRUE(c.driver.learner.start_correction);
+  EXPECT_DOUBLE_EQ(c.driver.learner.restart_alpha, 0.25);
+  ExpectError(Fill(fmt, "start_correction='yes'"), {"start_correction=\"yes\"", "off or on"});
+  ExpectError(Fill(fmt, "restart_alpha='0'"), {"restart_alpha"});
+  ExpectError(Fill(fmt, "restart_alpha='1.5'"), {"restart_alpha"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

@@ -26,7 +26,8 @@ FORMATS = [("hop", "%d"), ("t_start", "%.6f"), ("t_end", "%.6f"), ("cost", "%.9g
            ("I1", "%.9g"), ("I2", "%.9g"), ("I3", "%.9g"), ("I4", "%.9g"), ("T1", "%.6f"),
            ("T2", "%.6f"), ("step_length", "%.6f"), ("speed", "%.6f"), ("apex", "%.6f"),
            ("alpha", "%.6g"), ("accepted", "%d"), ("du2", "%.9g"), ("dT2", "%.9g"),
-           ("start_shift", "%.9g"), ("restarted", "%d"), ("remeasured", "%d")]
+           ("start_shift", "%.9g"), ("restarted", "%d"), ("remeasured", "%d"),
+           ("learner_cost", "%.9g")]
 
 
 # trajectory.csv's columns and formats (RunLog::WriteSample): t, hop, phase, 14 coordinates and
