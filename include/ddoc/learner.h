@@ -81,7 +81,8 @@ struct LearnerSettings {
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
   /// value of the pass, dx0 = trial x0 - nominal x0) plus the nominal's cost change under the
-  /// trial's cost reference (docs/engine.md, "Trials from other starts"). Default true.
+  /// trial's cost reference (docs/engine.md, "Trials from other starts"); with cyclic_value > 0
+  /// P(0) also values the following cycles. Default true.
   bool start_correction = true;
   /// Online learning: when alpha < alpha_min the line search restarts (alpha <- alpha_initial,
   /// the same nominal and cost) instead of terminating; batch Solve still terminates. Default
