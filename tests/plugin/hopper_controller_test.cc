@@ -393,6 +393,31 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   EXPECT_EQ(rig.c().learner()->iteration(), 0);
 }
 
+TEST(HopperControllerTest, LearnerCostIsTheCostUnderTheLearnersReference) {
+  // learner_cost is the cost that (36) compared. With I1 against the hop's own start (the
+  // paper's reading, anchor_reference = false) it is the reported cost of (42), up to the
+  // integration of the effort I2 (the learner's is about 0.1 % of I2 lower, in every hop). With
+  // I1 against the model gait's takeoff state (the default) I1 differs, by far more.
+  for (bool anchor : {false, true}) {
+    ControllerConfig config;
+    config.anchor_reference = anchor;
+    Robot rig("hopper_m8.xml", config, false);
+    ASSERT_TRUE(rig.ok());
+    const std::vector<HopReport> reports = rig.Run(6, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 6u);
+    double largest = 0;
+    for (const HopReport& r : reports) {
+      ASSERT_TRUE(std::isfinite(r.learner_cost)) << "hop " << r.hop;
+      largest = std::max(largest, std::abs(r.learner_cost - r.cost) / (1.0 + r.cost));
+    }
+    if (anchor) {
+      EXPECT_GT(largest, 0.1);
+    } else {
+      EXPECT_LT(largest, 2e-3);
+    }
+  }
+}
+
 TEST(HopperControllerTest, FrozenLawStopsLearningAndRestartsAreDeterministic) {
   // Freeze(): the learner sees no more trials (its iteration and nominal cost stay), reports go
   // on. RestartHop(x): the hop that follows depends on x and the law only, so two restarts from
