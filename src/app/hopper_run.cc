@@ -156,7 +156,10 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   if (o.hops && !o.seconds) s.seconds = 0;
   if (o.seconds && !o.hops) s.hops = 0;
   if (!o.robot.empty()) s.robot_mjcf = o.robot;
-  if (!o.model_mjcf.empty()) s.model_mjcf = o.model_mjcf;
+  if (!o.model_mjcf.empty()) {  // the flag replaces the scenario's model, numbers included
+    s.model_mjcf = o.model_mjcf;
+    s.model_numbers = ModelNumbers();
+  }
   if (o.no_pushes) {
     s.pushes.clear();
     s.hop_pushes.clear();

@@ -71,7 +71,7 @@ struct RunOverrides {
   std::optional<int> hops;               ///< --hops N (alone: no seconds limit)
   std::optional<double> seconds;         ///< --seconds S (alone: no hops limit)
   std::string robot;                     ///< --robot MJCF
-  std::string model_mjcf;                ///< --model-mjcf MJCF
+  std::string model_mjcf;                ///< --model-mjcf MJCF: replaces the scenario's <model>
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)

@@ -304,6 +304,24 @@ TEST_F(CliTest, GaitStiffnessReachesTheInitialLaw) {
   EXPECT_NEAR(mean, 30.0, 3.0);
 }
 
+TEST_F(CliTest, ModelMjcfFlagReplacesTheScenariosModel) {
+  // --model-mjcf replaces the whole <model>: inexact_m12 (<model M="10" c_d="0"/>) run with the
+  // robot's own MJCF as the model is exact_m12 (<model mjcf="../hopper_m12.xml"/>), hop for hop;
+  // the scenario's numbers must not be laid over the flag's MJCF.
+  const std::string robot = std::string(DDOC_MODELS_DIR) + "/hopper_m12.xml";
+  const std::string common = " --method ocfb --hops 3 --no-pushes --log-every 1000000000";
+  const Result flag = RunCli(Scenario("inexact_m12.xml") + " --model-mjcf " + robot + common +
+                             " --out " + Out("flag"));
+  const Result exact = RunCli(Scenario("exact_m12.xml") + common + " --out " + Out("exact"));
+  const Result inexact = RunCli(Scenario("inexact_m12.xml") + common + " --out " + Out("inexact"));
+  ASSERT_EQ(flag.code, 0) << flag.output;
+  ASSERT_EQ(exact.code, 0) << exact.output;
+  ASSERT_EQ(inexact.code, 0) << inexact.output;
+  const std::string with_flag = ReadFile(dir_ / "flag" / "hops.csv");
+  EXPECT_EQ(with_flag, ReadFile(dir_ / "exact" / "hops.csv"));
+  EXPECT_NE(with_flag, ReadFile(dir_ / "inexact" / "hops.csv"));
+}
+
 TEST_F(CliTest, EveryShippedScenarioRuns) {
   int count = 0;
   for (const auto& entry : fs::directory_iterator(std::string(DDOC_MODELS_DIR) + "/scenarios")) {
