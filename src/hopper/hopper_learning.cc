@@ -7,12 +7,12 @@ namespace ddoc {
 
 LearnerSettings HopperLearnerSettings() {
   LearnerSettings s;  // the default preset (kRiccati, alpha on the feed-forward only), then:
-  s.acceptance = Acceptance::kSufficientDecrease;
+  s.acceptance = Acceptance::kPredictedDecrease;  // the preset's, with its trust ratio kRatio
   s.interpolate_backtracking = false;
   s.step_convergence = true;
-  s.c = 1e-7;
+  s.c = 1e-4;
   s.gamma = 0.5;
-  s.alpha_after_accept = AlphaAfterAccept::kGrow;
+  s.alpha_after_accept = AlphaAfterAccept::kRatio;
   s.regularization_min = 0.01;
   s.backward.integrator = BackwardIntegrator::kRk4;
   s.backward.psd_switching_hessians = true;
@@ -32,6 +32,9 @@ LearnerSettings HopperModelSolveSettings() {
   LearnerSettings s = HopperLearnerSettings();
   s.alpha_initial = 0.1;
   s.blend_feedback = false;  // every trial starts from the same state: nothing to blend for
+  s.acceptance = Acceptance::kSufficientDecrease;  // (36) as printed: u^0 as before issue 19's
+  s.c = 1e-7;                                      // trust-ratio rule on the robot
+  s.alpha_after_accept = AlphaAfterAccept::kGrow;
   return s;
 }
 
