@@ -6,13 +6,12 @@
 namespace ddoc {
 
 LearnerSettings HopperLearnerSettings() {
-  LearnerSettings s;  // the default preset (kRiccati, alpha on the feed-forward only), then:
-  s.acceptance = Acceptance::kPredictedDecrease;  // the preset's, with its trust ratio kRatio
+  // The default preset (kRiccati, alpha on the feed-forward only, Armijo on the predicted
+  // decrease with the trust ratio kRatio), then:
+  LearnerSettings s;
   s.interpolate_backtracking = false;
   s.step_convergence = true;
-  s.c = 1e-4;
   s.gamma = 0.5;
-  s.alpha_after_accept = AlphaAfterAccept::kRatio;
   s.regularization_min = 0.01;
   s.backward.integrator = BackwardIntegrator::kRk4;
   s.backward.psd_switching_hessians = true;
@@ -32,8 +31,8 @@ LearnerSettings HopperModelSolveSettings() {
   LearnerSettings s = HopperLearnerSettings();
   s.alpha_initial = 0.1;
   s.blend_feedback = false;  // every trial starts from the same state: nothing to blend for
-  s.acceptance = Acceptance::kSufficientDecrease;  // (36) as printed: u^0 as before issue 19's
-  s.c = 1e-7;                                      // trust-ratio rule on the robot
+  s.acceptance = Acceptance::kSufficientDecrease;  // (36) as printed, alpha / gamma after an
+  s.c = 1e-7;                                      // accepted trial (docs/hopper.md)
   s.alpha_after_accept = AlphaAfterAccept::kGrow;
   return s;
 }

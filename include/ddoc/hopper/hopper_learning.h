@@ -17,11 +17,10 @@ namespace ddoc {
 
 /// Algorithm 1 on the hopper, the default: the engine's LearnerSettings{} with these overrides
 /// (why, with the measurements, in docs/hopper.md "Learner settings" and docs/robustness_map.md):
-/// Armijo on the predicted decrease (c = 1e-4) with the trust ratio after an accepted trial
-/// (kRatio: alpha doubles, capped at alpha_initial = 0.5, when the measured change is > 0.75 of
-/// the predicted one, halves when < 0.25), gamma = 0.5, plain backtracking and the paper's step
-/// test; the line search restarts at alpha = 1e-3 instead of terminating (restart_on_failure,
-/// restart_alpha); no start correction;
+/// the preset's Armijo test on the predicted decrease (c = 1e-4) and trust ratio (kRatio) with
+/// alpha_initial = 0.5, gamma = 0.5, plain backtracking and the paper's step test; the line
+/// search restarts at alpha = 1e-3 instead of terminating (restart_on_failure, restart_alpha);
+/// no start correction;
 /// regularization_min = 0.01; RK4 pass with PSD switching Hessians, box_aware = false,
 /// time_curvature = false, the periodic value cyclic_value = 0.99 and the terminal condition
 /// through the takeoff event (terminal_event); a trial's feedback blends from the nominal law's
