@@ -87,6 +87,10 @@ class SummaryTest(TempDirTest):
         # Condition (mass, cd 0, 0.5): alg1 and ocfb both survive in 3 of 4 masses; alg1 cheaper
         # or equal in 2 of them (7: 1.0 < 1.1, 8: 1.2 = 1.2, 9: 1.5 > 1.3); mass 10: ocfb fell.
         costs = {7: (1.0, 1.1), 8: (1.2, 1.2), 9: (1.5, 1.3), 10: (2.0, None)}
+        # Spread of the last 10 hops: standard error of the difference sqrt(2 sd^2 / 10), so
+        # mass 7 (sd 0.3): z = -0.1 / 0.134 = -0.75, within the spread; mass 8: z = 0; mass 9
+        # (sd 0.1): z = 0.2 / 0.0447 = 4.5, above by more than two standard errors.
+        sds = {7: 0.3, 8: 0.0, 9: 0.1, 10: 0.1}
         for _, name, keys in rm.cases(grid):
             m = int(keys["mass"])
             a, o = costs[m]
@@ -96,6 +100,7 @@ class SummaryTest(TempDirTest):
                               exit="0" if cost else "3", hops="100" if cost else "7",
                               survived="1" if cost else "0", fall_hop="" if cost else "7",
                               cost_last10="" if cost is None else repr(cost),
+                              cost_last10_sd="" if cost is None else repr(sds[m]),
                               learner_status="running")
         rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
         rm.report(self.tmp)
@@ -105,7 +110,8 @@ class SummaryTest(TempDirTest):
         self.assertIn("| ocfb | 3/4 |", text)
         self.assertIn("| mrl | 0/4 |", text)
         self.assertIn("both survive in 3 of 4 conditions; Alg1's last-10 cost <= OC-FB's in 2 of "
-                      "those 3 (67 %)", text)
+                      "those 3 (67 %). Beyond the hop-to-hop spread (more than two standard errors "
+                      "of the last 10 hops apart): Alg1 above OC-FB in 1, below in 0.", text)
         self.assertIn("| 10 | 0 | 0.5 | 100, 2 | fell @7 | fell @7 |", text)
         self.assertNotIn("Targets of issue 19", text)  # not the full grid
         for method in ("alg1", "ocfb", "mrl"):
@@ -254,6 +260,9 @@ class RealRunTest(TempDirTest):
             costs = [float(row["cost"]) for row in csv.DictReader(f)]
         self.assertEqual(len(costs), 5)
         self.assertAlmostEqual(float(mass["cost_last10"]), sum(costs) / 5, places=4)
+        mean = sum(costs) / 5
+        self.assertAlmostEqual(float(mass["cost_last10_sd"]),
+                               (sum((c - mean) ** 2 for c in costs) / 4) ** 0.5, places=4)
         [push] = csv_rows(os.path.join(out, "push_map.csv"))
         self.assertEqual((push["robot_mass"], push["force"], push["phase"], push["push_hop"]),
                          ("8", "15", "0.25", "2"))
