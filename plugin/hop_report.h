@@ -4,6 +4,8 @@
 #ifndef DDOC_PLUGIN_HOP_REPORT_H_
 #define DDOC_PLUGIN_HOP_REPORT_H_
 
+#include <limits>
+
 #include <Eigen/Core>
 
 #include "ddoc/hopper/hopper_cost.h"
@@ -40,6 +42,12 @@ struct HopReport {
   double start_shift = 0.0;  ///< TrialOutcome::start_shift: the start correction of (36)
   bool restarted = false;    ///< TrialOutcome::restarted: the line search restarted after it
   bool remeasured = false;   ///< TrialOutcome::remeasured: the hop re-ran the nominal's law
+  /// TrialOutcome::nominal_cost: the I^i that learner_cost was compared with (NaN: not judged)
+  double nominal_cost = std::numeric_limits<double>::quiet_NaN();
+  /// TrialOutcome::predicted: the predicted change dI_pred(alpha) of the trial (NaN: not judged)
+  double predicted = std::numeric_limits<double>::quiet_NaN();
+  /// TrialOutcome::optimality: the nominal's first-order optimality after the hop (NaN: not judged)
+  double optimality = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace ddoc::plugin

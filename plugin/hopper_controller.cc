@@ -389,6 +389,9 @@ void HopperController::TakeOfflineResult() {
     w.report.start_shift = outcome_.start_shift;
     w.report.restarted = outcome_.restarted;
     w.report.remeasured = outcome_.remeasured;
+    w.report.nominal_cost = outcome_.nominal_cost;
+    w.report.predicted = outcome_.predicted;
+    w.report.optimality = outcome_.optimality;
     w.needs_outcome = false;
     break;
   }

@@ -57,6 +57,9 @@ const HopColumn kHopColumns[] = {
     {"restarted", true, [](const HopReport& h) { return h.restarted ? 1.0 : 0.0; }},
     {"remeasured", true, [](const HopReport& h) { return h.remeasured ? 1.0 : 0.0; }},
     {"learner_cost", false, [](const HopReport& h) { return h.learner_cost; }},
+    {"nominal_cost", false, [](const HopReport& h) { return h.nominal_cost; }},
+    {"predicted", false, [](const HopReport& h) { return h.predicted; }},
+    {"optimality", false, [](const HopReport& h) { return h.optimality; }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 
@@ -310,7 +313,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
-T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured); 'trajectory', a
+T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
+learner_cost, nominal_cost, predicted, optimality); 'trajectory', a
 dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time and frames (PNG files written). ddoc.to_dataframe turns either table into a pandas

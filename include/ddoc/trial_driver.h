@@ -6,6 +6,7 @@
 #define DDOC_TRIAL_DRIVER_H_
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -54,6 +55,15 @@ struct TrialOutcome {
   double start_shift = 0;  ///< TrialResult::start_shift (0 for trials the learner did not judge)
   bool restarted = false;  ///< TrialResult::restarted: the line search restarted after it
   bool remeasured = false; ///< TrialResult::remeasured: it re-ran the nominal's law
+  /// TrialResult::nominal_cost, the I^i the trial was compared with (the Initialize trial: its
+  /// own I^0); NaN for trials the learner did not see.
+  double nominal_cost = std::numeric_limits<double>::quiet_NaN();
+  /// TrialResult::predicted, dI_pred(alpha) of the trial (0 for the Initialize trial); NaN for
+  /// trials the learner did not see.
+  double predicted = std::numeric_limits<double>::quiet_NaN();
+  /// TrialResult::optimality, the nominal's first-order optimality measure after the trial
+  /// (ComputeOptimality); NaN for trials the learner did not see.
+  double optimality = std::numeric_limits<double>::quiet_NaN();
   /// runs_per_trial > 1: this run is not the trial's last; the law runs again and the learner
   /// has not seen the run yet (`cost` is this run's).
   bool repeats = false;

@@ -100,6 +100,9 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.accepted = true;
     out.cost = learner_->nominal_cost();
     out.status = learner_->status();
+    out.nominal_cost = learner_->nominal_cost();
+    out.predicted = 0;
+    out.optimality = learner_->optimality().total;
     UseLearnedLaw(learner_->NextTrial());
   } else {
     const TrialResult r = learner_->CompleteTrial(
@@ -111,6 +114,9 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.start_shift = r.start_shift;
     out.restarted = r.restarted;
     out.remeasured = r.remeasured;
+    out.nominal_cost = r.nominal_cost;
+    out.predicted = r.predicted;
+    out.optimality = r.optimality;
     UseLearnedLaw(learner_->NextTrial());
     // Terminated, or re-measuring the nominal, before any trial passed (36): the law of
     // iteration 0 is u^0, which produced the nominal, not a replay of the nominal's inputs

@@ -240,7 +240,8 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   const std::vector<std::string> hops = Lines(ReadFile(dir_ / "run" / "hops.csv"));
   EXPECT_EQ(hops[0],
             "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
-            "dT2,method,start_shift,restarted,remeasured,learner_cost");
+            "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
+            "optimality");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
 }
 

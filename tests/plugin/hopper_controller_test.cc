@@ -418,6 +418,64 @@ TEST(HopperControllerTest, LearnerCostIsTheCostUnderTheLearnersReference) {
   }
 }
 
+TEST(HopperControllerTest, ReportsCarryWhatTheAcceptanceTestCompared) {
+  // nominal_cost, predicted and start_shift of a hop's report are the numbers the learner's test
+  // compared, so the log reproduces every decision: accepted exactly when learner_cost -
+  // (nominal_cost + start_shift) <= c predicted (Armijo on the predicted decrease; <= 0 when
+  // nothing is predicted), and the next hop is compared with this hop's cost exactly when this
+  // one was accepted. Hop 0 is the Initialize hop: its own cost is I^0, nothing is predicted.
+  const ControllerConfig config;
+  const LearnerSettings& ls = config.driver.learner;
+  ASSERT_EQ(ls.acceptance, Acceptance::kPredictedDecrease);
+  ASSERT_EQ(ls.noise_margin, 0.0);
+  ASSERT_FALSE(ls.remeasure_nominal);
+  ASSERT_EQ(config.driver.warmup_trials, 1);
+  Robot rig("hopper_m8.xml", config, false);
+  ASSERT_TRUE(rig.ok());
+  // When hop h's report arrives the learner has issued hop h + 1's trial: its prediction is
+  // dI_pred(alpha) = alpha dI_lin + alpha^2 / 2 dI_quad + the duration update's model change.
+  std::vector<HopReport> reports;
+  std::vector<double> next_predicted;
+  while (reports.size() < 12 && rig.d()->time < 20.0) {
+    rig.Step();
+    for (const HopReport& r : rig.c().TakeReports()) {
+      reports.push_back(r);
+      const Learner& l = *rig.c().learner();
+      const double a = l.alpha();
+      next_predicted.push_back(a * l.backward_pass().predicted_linear() +
+                               0.5 * a * a * l.backward_pass().predicted_quadratic() +
+                               l.switching_step().model_change);
+    }
+    ASSERT_FALSE(rig.c().failed()) << rig.c().error();
+  }
+  ASSERT_EQ(reports.size(), 12u);
+  EXPECT_EQ(reports[0].nominal_cost, reports[0].learner_cost);
+  EXPECT_EQ(reports[0].predicted, 0.0);
+  int accepted = 0, rejected = 0;
+  for (size_t h = 0; h < reports.size(); ++h) {
+    const HopReport& r = reports[h];
+    ASSERT_TRUE(std::isfinite(r.learner_cost) && std::isfinite(r.nominal_cost) &&
+                std::isfinite(r.predicted) && std::isfinite(r.optimality))
+        << "hop " << h;
+    EXPECT_GT(r.optimality, 0.0) << "hop " << h;
+    if (h == 0) continue;
+    EXPECT_NEAR(r.predicted, next_predicted[h - 1], 1e-12 * (1.0 + std::abs(r.predicted)))
+        << "hop " << h;
+    const double decrease = r.learner_cost - (r.nominal_cost + r.start_shift);
+    const bool armijo =
+        r.predicted < 0 ? decrease <= ls.c * r.predicted : decrease <= 0.0;
+    EXPECT_EQ(r.accepted, armijo) << "hop " << h << ": decrease " << decrease << ", predicted "
+                                  << r.predicted;
+    const HopReport& prev = reports[h - 1];
+    EXPECT_EQ(r.nominal_cost, prev.accepted ? prev.learner_cost : prev.nominal_cost)
+        << "hop " << h;
+    (r.accepted ? accepted : rejected) += 1;
+  }
+  // Both kinds of decision happen on this robot in 12 hops, so the identities were exercised.
+  EXPECT_GT(accepted, 0);
+  EXPECT_GT(rejected, 0);
+}
+
 TEST(HopperControllerTest, FrozenLawStopsLearningAndRestartsAreDeterministic) {
   // Freeze(): the learner sees no more trials (its iteration and nominal cost stay), reports go
   // on. RestartHop(x): the hop that follows depends on x and the law only, so two restarts from
