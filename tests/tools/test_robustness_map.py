@@ -7,6 +7,7 @@ import filecmp
 import importlib.machinery
 import importlib.util
 import json
+import math
 import os
 import subprocess
 import unittest
@@ -117,6 +118,18 @@ class SummaryTest(TempDirTest):
         for method in ("alg1", "ocfb", "mrl"):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"mass_{method}.png")))
+
+    def test_z_score(self):
+        def row(cost, sd, hops="100"):
+            return {"cost_last10": cost, "cost_last10_sd": sd, "hops": hops}
+        # 100 hops: 10 averaged, se = sqrt(0.01 / 10 + 0.04 / 10) = 0.0707.
+        self.assertAlmostEqual(rm.z_score(row("1.3", "0.1"), row("1.2", "0.2")), 0.1 / 0.005 ** 0.5)
+        # 5 hops: 5 averaged, se = sqrt(0.01 / 5 + 0.01 / 5) = 0.0632.
+        self.assertAlmostEqual(rm.z_score(row("1.0", "0.1", "5"), row("1.1", "0.1", "5")),
+                               -0.1 / 0.004 ** 0.5)
+        self.assertTrue(math.isnan(rm.z_score(row("1.3", ""), row("1.2", "0.1"))))  # no spread
+        self.assertEqual(rm.z_score(row("1.3", "0"), row("1.2", "0")), math.inf)
+        self.assertEqual(rm.z_score(row("1.2", "0"), row("1.2", "0")), 0.0)
 
     def grid(self):
         return rm.grid_from_args(rm.run_parser().parse_args(
