@@ -31,6 +31,23 @@ struct OnlineControllerSettings {
   BoxQPSettings qp;  ///< settings of the m-dimensional box QP
 };
 
+/// A loaded OnlineController's law as plain arrays: everything Step reads besides the settings.
+/// A host can keep it and load it later without re-solving (ExportLaw, ImportLaw); the engine
+/// itself does no I/O. S = sum of samples[k]; sample s of mode k is column offset_k + j.
+struct OnlineControllerLaw {
+  double alpha = 0.0;            ///< alpha of (34)
+  double feedback_factor = 1.0;  ///< alpha (kLyapunov) or 1 (kRiccati)
+  Vector dT;                     ///< K: dT_alpha
+  Vector nominal_T;              ///< K: T^i; the planned T^{i+1} = T^i + dT
+  std::vector<int> samples;      ///< K: N_k, each >= 2
+  Vector tau;                    ///< S: normalized time, in [k, k+1] and nondecreasing in mode k
+  Matrix x;                      ///< n_max x S: nominal states (rows past n_k unused)
+  Matrix u;                      ///< m x S: nominal inputs
+  Matrix Kx;                     ///< m n_max x S: state gains, column-major m x n_k (rest unused)
+  Matrix c;                      ///< m x S: constant part of b (dT and alpha folded in)
+  Matrix huu;                    ///< m^2 x S: H = L_uu + mu I
+};
+
 /// The control law of trial i+1, built from nominal trial i (Algorithm 1, online part):
 ///
 ///   du = argmin_{du in U - u^i(tau)} 1/2 du^T H du + du^T b                          (33)
@@ -66,6 +83,13 @@ class OnlineController : public Policy {
   void Load(const Trajectory& nominal, const BackwardPass& pass, double alpha,
             const ConstVectorRef& dT);
   bool loaded() const { return loaded_; }
+  /// The loaded law as plain arrays (allocates). Throws InvalidArgument when nothing is loaded.
+  OnlineControllerLaw ExportLaw() const;
+  /// Loads a law exported by ExportLaw of a controller allocated for the same problem: a
+  /// controller so loaded steps bitwise like the exporting one (with the same settings). Checks
+  /// every size and value and throws InvalidArgument naming the first bad field, before anything
+  /// changes. Does not allocate.
+  void ImportLaw(const OnlineControllerLaw& law);
 
   void BeginTrial() override;
   double PlannedDuration(int k) const override { return planned_durations_(k); }

@@ -27,6 +27,10 @@ class SampleLayout {
   /// in total. Allocation-free. Returns the total number of samples.
   int Assign(const Trajectory& trajectory, const char* who);
 
+  /// Takes the sample counts N_k directly (K of them, each >= 2, at most max_samples in total),
+  /// with the same checks and messages as Assign. Allocation-free. Returns the total.
+  int AssignCounts(const std::vector<int>& counts, const char* who);
+
   int num_modes() const { return static_cast<int>(dims_.size()); }  ///< K
   int input_dim() const { return m_; }                               ///< m
   int max_samples() const { return max_samples_; }
@@ -43,6 +47,10 @@ class SampleLayout {
   int m_ = 0;
   int total_ = 0;
   int max_samples_ = 0;
+
+  // counts_ holds the new N_k: sets the offsets and the total, or throws naming `who` when the
+  // total exceeds max_samples.
+  int Commit(const char* what, const char* who);
 };
 
 }  // namespace ddoc

@@ -146,6 +146,105 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   BeginTrial();
 }
 
+OnlineControllerLaw OnlineController::ExportLaw() const {
+  if (!loaded_) throw InvalidArgument("OnlineController::ExportLaw: no law is loaded");
+  const int S = layout_.total();
+  OnlineControllerLaw law;
+  law.alpha = alpha_;
+  law.feedback_factor = feedback_factor_;
+  law.dT = dT_;
+  law.nominal_T = nominal_T_;
+  law.samples.resize(K_);
+  for (int k = 0; k < K_; ++k) law.samples[k] = layout_.count(k);
+  law.tau = tau_.head(S);
+  law.x = x_.leftCols(S);
+  law.u = u_.leftCols(S);
+  law.Kx = Kx_.leftCols(S);
+  law.c = c_.leftCols(S);
+  law.huu = huu_.leftCols(S);
+  return law;
+}
+
+void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
+  // No std::string unless a check fails: the import does not allocate.
+  auto fail = [](const std::string& what) {
+    throw InvalidArgument("OnlineController::ImportLaw: " + what);
+  };
+  if (problem_ == nullptr) fail("call Allocate first");
+  if (!(law.alpha >= 0) || !std::isfinite(law.alpha)) {
+    fail("alpha = " + std::to_string(law.alpha) + ", expected finite and >= 0");
+  }
+  if (law.feedback_factor != law.alpha && law.feedback_factor != 1.0) {
+    fail("feedback_factor = " + std::to_string(law.feedback_factor) + ", expected alpha or 1");
+  }
+  if (static_cast<int>(law.samples.size()) != K_) {
+    fail("samples has " + std::to_string(law.samples.size()) + " entries, expected K = " +
+         std::to_string(K_));
+  }
+  long total = 0;
+  for (int k = 0; k < K_; ++k) {
+    if (law.samples[k] < 2) {
+      fail("samples[" + std::to_string(k) + "] = " + std::to_string(law.samples[k]) +
+           ", expected >= 2");
+    }
+    total += law.samples[k];
+  }
+  if (total > layout_.max_samples()) {
+    fail(std::to_string(total) + " samples, more than max_samples = " +
+         std::to_string(layout_.max_samples()));
+  }
+  const int S = static_cast<int>(total);
+  auto check = [&](const char* name, const auto& a, Eigen::Index rows, Eigen::Index cols) {
+    if (a.rows() != rows || a.cols() != cols) {
+      fail(std::string(name) + " is " + std::to_string(a.rows()) + "x" +
+           std::to_string(a.cols()) + ", expected " + std::to_string(rows) + "x" +
+           std::to_string(cols));
+    }
+    if (!a.allFinite()) fail(std::string(name) + " has a non-finite entry");
+  };
+  check("dT", law.dT, K_, 1);
+  check("nominal_T", law.nominal_T, K_, 1);
+  check("tau", law.tau, S, 1);
+  check("x", law.x, n_max_, S);
+  check("u", law.u, m_, S);
+  check("Kx", law.Kx, static_cast<Eigen::Index>(m_) * n_max_, S);
+  check("c", law.c, m_, S);
+  check("huu", law.huu, static_cast<Eigen::Index>(m_) * m_, S);
+  double previous_T = 0.0;
+  for (int k = 0, s = 0; k < K_; ++k) {
+    const double planned = law.nominal_T(k) + law.dT(k);
+    if (!(planned - previous_T > 0)) {
+      fail("planned duration of mode " + std::to_string(k) + " is " +
+           std::to_string(planned - previous_T) + ", expected > 0");
+    }
+    previous_T = planned;
+    for (int j = 0; j < law.samples[k]; ++j, ++s) {
+      const double tau = law.tau(s);
+      if (tau < k || tau > k + 1 || (j > 0 && tau < law.tau(s - 1))) {
+        fail("tau(" + std::to_string(s) + ") = " + std::to_string(tau) + " in mode " +
+             std::to_string(k) + ", expected in [k, k+1] and nondecreasing");
+      }
+    }
+  }
+  layout_.AssignCounts(law.samples, "OnlineController::ImportLaw");
+  alpha_ = law.alpha;
+  feedback_factor_ = law.feedback_factor;
+  dT_ = law.dT;
+  nominal_T_ = law.nominal_T;
+  planned_T_ = nominal_T_ + dT_;
+  for (int k = 0; k < K_; ++k) {
+    planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
+  }
+  tau_.head(S) = law.tau;
+  x_.leftCols(S) = law.x;
+  u_.leftCols(S) = law.u;
+  Kx_.leftCols(S) = law.Kx;
+  c_.leftCols(S) = law.c;
+  huu_.leftCols(S) = law.huu;
+  loaded_ = true;
+  BeginTrial();
+}
+
 void OnlineController::BlendStateFeedback(const OnlineController& law, double w) {
   const char* what = "OnlineController::BlendStateFeedback: ";
   if (!loaded_ || !law.loaded_) {

@@ -28,7 +28,6 @@ int SampleLayout::Assign(const Trajectory& trajectory, const char* who) {
                           std::to_string(trajectory.num_modes()) + " modes, expected K = " +
                           std::to_string(K));
   }
-  int total = 0;
   for (int k = 0; k < K; ++k) {
     const ModeTrajectory& mode = trajectory.modes[k];
     const int N = mode.num_samples();
@@ -40,12 +39,35 @@ int SampleLayout::Assign(const Trajectory& trajectory, const char* who) {
          << "; expected >= 2 samples, x n_k = " << dims_[k] << " rows, u m = " << m_ << " rows";
       throw InvalidArgument(os.str());
     }
-    offsets_[k] = total;
     counts_[k] = N;
-    total += N;
+  }
+  return Commit("trajectory", who);
+}
+
+int SampleLayout::AssignCounts(const std::vector<int>& counts, const char* who) {
+  const int K = num_modes();
+  if (static_cast<int>(counts.size()) != K) {
+    throw InvalidArgument(std::string(who) + ": " + std::to_string(counts.size()) +
+                          " sample counts, expected K = " + std::to_string(K));
+  }
+  for (int k = 0; k < K; ++k) {
+    if (counts[k] < 2) {
+      throw InvalidArgument(std::string(who) + ": mode " + std::to_string(k) + " has " +
+                            std::to_string(counts[k]) + " samples, expected >= 2");
+    }
+  }
+  for (int k = 0; k < K; ++k) counts_[k] = counts[k];
+  return Commit("law", who);
+}
+
+int SampleLayout::Commit(const char* what, const char* who) {
+  int total = 0;
+  for (int k = 0; k < num_modes(); ++k) {
+    offsets_[k] = total;
+    total += counts_[k];
   }
   if (total > max_samples_) {
-    throw InvalidArgument(std::string(who) + ": trajectory has " + std::to_string(total) +
+    throw InvalidArgument(std::string(who) + ": " + what + " has " + std::to_string(total) +
                           " samples, more than max_samples = " + std::to_string(max_samples_));
   }
   total_ = total;

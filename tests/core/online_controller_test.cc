@@ -4,6 +4,7 @@
 // mapping and its clamping, robustness to non-finite input, int |du|^2, no allocation.
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -365,6 +366,7 @@ TEST(OnlineController, StepDoesNotAllocate) {
   OnlineController other;
   other.Allocate(s.problem, 2000);
   other.Load(s.nominal, s.pass, 0.0, zero);
+  const OnlineControllerLaw exported = other.ExportLaw();
   MallocCounter counter;
   for (int i = 0; i < 300; ++i) ctrl.Step(0, i * 1e-3, x0, u);
   for (int i = 0; i < 300; ++i) ctrl.Step(1, i * 1e-3, x1, u);
@@ -374,6 +376,90 @@ TEST(OnlineController, StepDoesNotAllocate) {
   EXPECT_EQ(counter.count(), 0) << "Load";
   ctrl.BlendStateFeedback(other, 0.5);
   EXPECT_EQ(counter.count(), 0) << "BlendStateFeedback";
+  ctrl.ImportLaw(exported);
+  EXPECT_EQ(counter.count(), 0) << "ImportLaw";
+}
+
+// u of `a` and `b` over both modes at states off the nominal, compared bitwise.
+void ExpectSameSteps(const ControlSetup& s, OnlineController& a, OnlineController& b) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> nd;
+  const int m = static_cast<int>(s.problem.bounds.u_min.size());
+  Vector ua(m), ub(m);
+  a.BeginTrial();
+  b.BeginTrial();
+  for (int k = 0; k < 2; ++k) {
+    for (int i = 0; i < 40; ++i) {
+      Vector x = s.nominal.modes[k].x.col(0);
+      for (Eigen::Index r = 0; r < x.size(); ++r) x(r) += 0.2 * nd(rng);
+      a.Step(k, i * 0.011, x, ua);
+      b.Step(k, i * 0.011, x, ub);
+      ASSERT_EQ(ua, ub) << "mode " << k << " step " << i;
+    }
+  }
+  EXPECT_EQ(a.PlannedDuration(0), b.PlannedDuration(0));
+  EXPECT_EQ(a.PlannedDuration(1), b.PlannedDuration(1));
+  EXPECT_EQ(a.alpha(), b.alpha());
+  EXPECT_EQ(a.feedback_factor(), b.feedback_factor());
+}
+
+TEST(OnlineController, ImportedLawStepsBitwiseLikeTheExportedOne) {
+  for (BackwardEquation eq : {BackwardEquation::kRiccati, BackwardEquation::kLyapunov}) {
+    ControlSetup s(2, 4, 3, 0.4, eq);
+    OnlineController source, other, target;
+    source.Allocate(s.problem, 1000);
+    other.Allocate(s.problem, 1000);
+    target.Allocate(s.problem, 1000);
+    EXPECT_THROW(source.ExportLaw(), InvalidArgument);
+    source.Load(s.nominal, s.pass, 0.35, Vector::Constant(2, 0.02));
+    other.Load(s.nominal, s.pass, 0.8, Vector::Constant(2, -0.01));
+    source.BlendStateFeedback(other, 0.3);  // gains no Load alone gives
+    target.Load(s.nominal, s.pass, 1.0, Vector::Zero(2));  // a law to overwrite
+    const OnlineControllerLaw law = source.ExportLaw();
+    EXPECT_EQ(law.tau.size(), s.nominal.total_samples());
+    target.ImportLaw(law);
+    ExpectSameSteps(s, source, target);
+  }
+}
+
+TEST(OnlineController, ImportLawNamesTheBadFieldAndKeepsTheLoadedLaw) {
+  ControlSetup s(2);
+  OnlineController source, target, reference;
+  EXPECT_THROW(target.ImportLaw(OnlineControllerLaw{}), InvalidArgument);  // before Allocate
+  source.Allocate(s.problem, 1000);
+  target.Allocate(s.problem, 1000);
+  reference.Allocate(s.problem, 1000);
+  source.Load(s.nominal, s.pass, 0.5, Vector::Zero(2));
+  target.Load(s.nominal, s.pass, 0.9, Vector::Constant(2, 0.01));
+  reference.Load(s.nominal, s.pass, 0.9, Vector::Constant(2, 0.01));
+  const OnlineControllerLaw good = source.ExportLaw();
+  const int S = static_cast<int>(good.tau.size());
+  auto expect_error = [&](const char* label, const std::function<void(OnlineControllerLaw*)>& edit,
+                          const std::string& needle) {
+    OnlineControllerLaw bad = good;
+    edit(&bad);
+    try {
+      target.ImportLaw(bad);
+      ADD_FAILURE() << label << ": no error";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << label << ": " << e.what();
+    }
+  };
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  expect_error("alpha", [&](OnlineControllerLaw* l) { l->alpha = nan; }, "alpha");
+  expect_error("factor", [](OnlineControllerLaw* l) { l->feedback_factor = 0.3; }, "feedback_factor");
+  expect_error("modes", [](OnlineControllerLaw* l) { l->samples.pop_back(); }, "samples has 1");
+  expect_error("count", [](OnlineControllerLaw* l) { l->samples[1] = 1; }, "samples[1] = 1");
+  expect_error("max", [](OnlineControllerLaw* l) { l->samples[0] = 2000; }, "max_samples = 1000");
+  expect_error("tau size", [](OnlineControllerLaw* l) { l->samples[0] -= 1; }, "tau is");
+  expect_error("Kx", [&](OnlineControllerLaw* l) { l->Kx(3, S / 2) = nan; }, "Kx has a non-finite");
+  expect_error("huu", [](OnlineControllerLaw* l) { l->huu.conservativeResize(3, Eigen::NoChange); },
+               "huu is 3x");
+  expect_error("order", [&](OnlineControllerLaw* l) { std::swap(l->tau(3), l->tau(4)); }, "tau(4)");
+  expect_error("range", [&](OnlineControllerLaw* l) { l->tau(S - 1) = 2.5; }, "expected in [k, k+1]");
+  expect_error("duration", [](OnlineControllerLaw* l) { l->dT(1) = -5.0; },
+               "planned duration of mode 1");
+  ExpectSameSteps(s, target, reference);  // every failed import left the law as it was
 }
 
 }  // namespace
