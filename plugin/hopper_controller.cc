@@ -1,6 +1,8 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "hopper_controller.h"
 
+#include "law_cache.h"
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -90,14 +92,17 @@ void HopperController::Initialize() {
   });
   // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
   gait_ = FindNominalGait(config_.model, config_.gait);
-  Learner model_learner(problem_, config_.model_learner);
-  const SolveResult solved = SolveFromGait(model_learner, model_plant_, &cost_, gait_);
-  model_cost_ = solved.cost;
-  model_iterations_ = solved.iterations;
-  if (!std::isfinite(model_cost_)) {
-    throw InvalidArgument("the model-based initial solve produced a non-finite cost");
+  if (!LoadInitialLaw()) {
+    Learner model_learner(problem_, config_.model_learner);
+    const SolveResult solved = SolveFromGait(model_learner, model_plant_, &cost_, gait_);
+    model_cost_ = solved.cost;
+    model_iterations_ = solved.iterations;
+    if (!std::isfinite(model_cost_)) {
+      throw InvalidArgument("the model-based initial solve produced a non-finite cost");
+    }
+    fallback_ = model_learner.ConvergedPolicy(config_.ocfb_alpha);
+    StoreInitialLaw();
   }
-  fallback_ = model_learner.ConvergedPolicy(config_.ocfb_alpha);
   bridge_ = fallback_;
   const bool mrl = config_.driver.method == Method::kMrl;
   driver_ = std::make_unique<TrialDriver>(
@@ -112,6 +117,49 @@ void HopperController::Initialize() {
   waiting_.reserve(8);
   if (config_.offline_thread && config_.offline_latency > 0.0) {
     worker_ = std::thread([this] { WorkerLoop(); });
+  }
+}
+
+bool HopperController::LoadInitialLaw() {
+  if (config_.law_cache.empty()) return false;
+  law_key_ = InitialLawKey(config_);
+  if (law_key_.empty()) {
+    law_cache_status_ = "solved; not stored: no GNU build id to key the law by";
+    return false;
+  }
+  StoredInitialLaw stored;
+  std::string why;
+  const std::string path = InitialLawPath(config_.law_cache, law_key_);
+  if (!ReadInitialLaw(config_.law_cache, law_key_, &stored, &why)) {
+    if (why != "no file") law_unusable_ = " (" + path + ": " + why + ")";
+    return false;
+  }
+  try {
+    fallback_.Allocate(problem_, config_.model_learner.max_samples,
+                       config_.model_learner.controller);
+    fallback_.ImportLaw(stored.law);
+  } catch (const InvalidArgument& e) {
+    law_unusable_ = " (" + path + ": " + e.what() + ")";
+    return false;
+  }
+  cost_.SetReference(gait_.x0);  // as SolveFromGait leaves it
+  model_cost_ = stored.model_cost;
+  model_iterations_ = stored.model_iterations;
+  law_cache_status_ = "loaded " + path;
+  return true;
+}
+
+void HopperController::StoreInitialLaw() {
+  if (config_.law_cache.empty() || law_key_.empty()) return;
+  StoredInitialLaw stored;
+  stored.law = fallback_.ExportLaw();
+  stored.model_cost = model_cost_;
+  stored.model_iterations = model_iterations_;
+  std::string why;
+  if (WriteInitialLaw(config_.law_cache, law_key_, stored, &why)) {
+    law_cache_status_ = "stored " + InitialLawPath(config_.law_cache, law_key_) + law_unusable_;
+  } else {
+    law_cache_status_ = "solved; not stored: " + why + law_unusable_;
   }
 }
 

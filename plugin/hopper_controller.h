@@ -63,6 +63,9 @@ struct ControllerConfig {
   /// true: the offline part runs on a worker thread (as on a robot); false: in RunOffline().
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
+  /// Directory of stored u^0 laws (plugin/law_cache.h): Create loads u^0 from it when the model
+  /// solve's inputs and binaries match, else solves and stores. "" (default) = always solve.
+  std::string law_cache;
 };
 
 /// The controller. One instance per mjData. Compute, TakeReports and the observers belong to the
@@ -133,6 +136,9 @@ class HopperController {
   bool runs_initial_law() const { return law_ == &fallback_ || law_ == &bridge_; }
   double model_cost() const { return model_cost_; }  ///< converged OC-FB cost on the model
   int model_iterations() const { return model_iterations_; }
+  /// Where u^0 came from: "solved" (no law_cache), "loaded <file>", "stored <file>", or "solved;
+  /// not stored: <why>"; a stored file that could not be used adds " (<file>: <why>)".
+  const std::string& law_cache_status() const { return law_cache_status_; }
   /// Set when the controller caught an internal error (the message says what failed); it then
   /// holds the last safe input until Reset.
   bool failed() const { return failed_; }
@@ -151,6 +157,10 @@ class HopperController {
 
   HopperController(const mjModel* m, const ControllerConfig& config);
   void Initialize();  // gait, u^0, driver; throws
+  // u^0 from config_.law_cache: true when loaded (sets fallback_, model_cost_, ...).
+  bool LoadInitialLaw();
+  // Stores the solved u^0 into config_.law_cache (when set); sets law_cache_status_.
+  void StoreInitialLaw();
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void Step(const mjData* d);
   void Touchdown(double t);
@@ -178,6 +188,9 @@ class HopperController {
   std::unique_ptr<TrialDriver> driver_;
   double model_cost_ = 0.0;
   int model_iterations_ = 0;
+  std::string law_cache_status_ = "solved";
+  std::string law_key_;       // InitialLawKey of config_ when law_cache is set
+  std::string law_unusable_;  // " (<file>: <why>)" when a stored law could not be used
   std::vector<Vector> pitch_scale_;  // PitchFeedbackExperiment: per mode, empty when off
 
   // Per-step state (Compute).

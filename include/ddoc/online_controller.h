@@ -138,6 +138,8 @@ class OnlineController : public Policy {
   // *H = (1 - a) H(s0) + a H(s1), the global samples' H = L_uu + mu I.
   void InterpolateHessian(int s0, int s1, double a, Matrix* H) const;
   void Accumulate(int k, double tau);
+  // planned_T_ = nominal_T_ + dT_ and planned_durations_ from it.
+  void PlanDurations();
 
   const Problem* problem_ = nullptr;
   OnlineControllerSettings settings_;

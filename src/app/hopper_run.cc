@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 
 #ifdef DDOC_HAVE_RENDER
@@ -123,6 +124,10 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--offline-latency", offline_latency,
                   "simulated s from a hop's end until the law learned from it takes effect "
                   "(default 0.02; 0: learn inside the control callback, synchronously)");
+  cli->add_option("--law-cache", law_cache,
+                  "directory of stored initial laws u^0: load u^0 when the model solve's inputs "
+                  "and binaries match, else solve and store it (default: $DDOC_LAW_CACHE, unset: "
+                  "always solve)");
   if (!full) return;
   cli->add_option("--hops", hops, "number of hops (overrides the scenario)");
   cli->add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
@@ -191,6 +196,11 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   }
   run.config = ControllerConfigFor(run.scenario, params);
   if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
+  run.config.law_cache = overrides.law_cache;
+  if (run.config.law_cache.empty()) {
+    const char* env = std::getenv("DDOC_LAW_CACHE");
+    if (env != nullptr) run.config.law_cache = env;
+  }
   run.data.reset(mj_makeData(run.model.get()));
   if (start_controller) StartController(&run);
   return run;

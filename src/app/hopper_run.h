@@ -76,6 +76,8 @@ struct RunOverrides {
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
   std::string preset;                    ///< --preset default | paper (overrides the scenario)
+  /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE.
+  std::string law_cache;
 
   /// Registers the flags shared by ddoc-hopper and ddoc-return-map on `cli`; `full` adds those
   /// only ddoc-hopper takes (--hops, --seconds, --robot, --model-mjcf, --push).

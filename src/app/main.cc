@@ -165,6 +165,7 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
   summary_.robot = s.robot_mjcf;
   summary_.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
   summary_.offline_latency_s = run->config.offline_latency;
+  summary_.initial_law = run->controller->law_cache_status();
   summary_.pushes = s.pushes;
   summary_.hop_pushes = s.hop_pushes;
   summary_.hop_push_times = stepper_.hop_push_times();

@@ -127,6 +127,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["robot"] = s.robot;
   j["model"] = s.model;
   j["offline_latency_s"] = s.offline_latency_s;
+  j["initial_law"] = s.initial_law;
   j["hops"] = s.hops;
   j["fell"] = s.fell;
   j["fall_reason"] = s.fall_reason;

@@ -45,6 +45,7 @@ struct EventRecord {
 struct Summary {
   std::string scenario, method, robot, model;
   double offline_latency_s = 0.0;  // ControllerConfig::offline_latency of the run
+  std::string initial_law;         // HopperController::law_cache_status()
   int hops = 0;
   bool fell = false;
   std::string fall_reason;

@@ -111,9 +111,8 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   feedback_factor_ = scale_all ? alpha : 1.0;
   dT_ = dT;
   nominal_T_ = nominal.T;
-  planned_T_ = nominal.T + dT;
+  PlanDurations();
   for (int k = 0; k < K_; ++k) {
-    planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
     if (!(planned_durations_(k) > 0)) {
       throw InvalidArgument("OnlineController::Load: planned duration of mode " +
                             std::to_string(k) + " is " + std::to_string(planned_durations_(k)) +
@@ -144,6 +143,13 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   }
   loaded_ = true;
   BeginTrial();
+}
+
+void OnlineController::PlanDurations() {
+  planned_T_ = nominal_T_ + dT_;
+  for (int k = 0; k < K_; ++k) {
+    planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
+  }
 }
 
 OnlineControllerLaw OnlineController::ExportLaw() const {
@@ -231,10 +237,7 @@ void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
   feedback_factor_ = law.feedback_factor;
   dT_ = law.dT;
   nominal_T_ = law.nominal_T;
-  planned_T_ = nominal_T_ + dT_;
-  for (int k = 0; k < K_; ++k) {
-    planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
-  }
+  PlanDurations();
   tau_.head(S) = law.tau;
   x_.leftCols(S) = law.x;
   u_.leftCols(S) = law.u;

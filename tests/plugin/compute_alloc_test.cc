@@ -11,6 +11,7 @@
 #include "ddoc/mujoco/hopper_sim.h"
 #include "hopper_controller.h"
 #include "malloc_counter.h"
+#include "robot.h"
 
 namespace ddoc::plugin {
 namespace {
@@ -22,7 +23,7 @@ TEST(ComputeAllocTest, ComputeDoesNotAllocateWhileLearning) {
   ControllerConfig config;  // defaults: offline_latency 20 ms, host mode
   config.gait.forward_speed = 0.5;
   std::string error;
-  std::unique_ptr<HopperController> c = HopperController::Create(model.get(), config, &error);
+  std::unique_ptr<HopperController> c = HopperController::Create(model.get(), WithTestLawCache(config), &error);
   ASSERT_TRUE(c) << error;
   c->Reset(model.get(), data.get());
   Attach(c.get());

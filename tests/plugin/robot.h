@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,6 +24,14 @@ enum class Host {
   kNothing,         ///< nothing: the offline part stays pending
 };
 
+/// `config` with law_cache = $DDOC_LAW_CACHE when it is unset (ctest sets the variable to the
+/// build tree's shared directory of stored u^0 laws; tests/CMakeLists.txt).
+inline ControllerConfig WithTestLawCache(ControllerConfig config) {
+  const char* dir = std::getenv("DDOC_LAW_CACHE");
+  if (config.law_cache.empty() && dir != nullptr) config.law_cache = dir;
+  return config;
+}
+
 class Robot {
  public:
   /// The robot models/<mjcf> with a controller of `config` at 0.5 m/s, Reset. With exact_model
@@ -34,7 +43,7 @@ class Robot {
     config.gait.forward_speed = 0.5;
     if (exact_model) config.model = LoadHopperParamsFromMjcf(path);
     std::string error;
-    controller_ = HopperController::Create(model_.get(), config, &error);
+    controller_ = HopperController::Create(model_.get(), WithTestLawCache(config), &error);
     EXPECT_TRUE(controller_) << error;
     if (controller_) Restart();
   }

@@ -1,0 +1,46 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// A directory of stored initial laws u^0. Deriving u^0 (the model-based solve) takes seconds
+// (about 7x longer under the sanitizers); a run whose model solve has the same inputs, built
+// from the same binaries, can load the stored law instead and steps bitwise as if it had solved.
+// docs/design.md, "The law cache".
+#ifndef DDOC_PLUGIN_LAW_CACHE_H_
+#define DDOC_PLUGIN_LAW_CACHE_H_
+
+#include <string>
+
+#include "ddoc/online_controller.h"
+
+namespace ddoc::plugin {
+
+struct ControllerConfig;
+
+/// What the model solve leaves behind for the controller.
+struct StoredInitialLaw {
+  OnlineControllerLaw law;   ///< u^0 = Learner::ConvergedPolicy(ocfb_alpha) of the model solve
+  double model_cost = 0.0;   ///< converged OC-FB cost on the model
+  int model_iterations = 0;  ///< trials of the model solve
+};
+
+/// The text that identifies u^0: every ControllerConfig field the model solve reads (doubles as
+/// hex floats, so equal text means equal values) and the GNU build ids of the objects that hold
+/// the solve's code and the math library. Empty when a build id cannot be read: then nothing is
+/// stored or loaded.
+std::string InitialLawKey(const ControllerConfig& config);
+
+/// The file of `key` in `dir`: <dir>/u0-<64-bit FNV-1a of key, hex>.law.
+std::string InitialLawPath(const std::string& dir, const std::string& key);
+
+/// Reads the law of `key` from `dir`. False with *why ("no file", "checksum mismatch", "stored
+/// for another key", ...) when there is no usable law; the file is then left as it is.
+bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitialLaw* out,
+                    std::string* why);
+
+/// Writes the law of `key` into `dir` (created if missing) through a temporary file and a rename,
+/// so a concurrent reader sees the old file or the whole new one. False with *why on failure.
+bool WriteInitialLaw(const std::string& dir, const std::string& key, const StoredInitialLaw& law,
+                     std::string* why);
+
+}  // namespace ddoc::plugin
+
+#endif  // DDOC_PLUGIN_LAW_CACHE_H_

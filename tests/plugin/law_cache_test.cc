@@ -1,0 +1,202 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// The law cache (plugin/law_cache.h): a loaded u^0 steps the robot bitwise like a solved one;
+// the key changes with every input of the model solve; a corrupt, truncated or foreign file and
+// an unwritable directory make the controller solve (and say so), never fail or load bad data.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "law_cache.h"
+#include "robot.h"
+
+namespace ddoc::plugin {
+namespace {
+
+namespace fs = std::filesystem;
+
+class LawCacheTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("ddoc_law_cache_" + std::string(::testing::UnitTest::GetInstance()
+                                                ->current_test_info()
+                                                ->name()));
+    fs::remove_all(dir_);
+    // Robot reads $DDOC_LAW_CACHE when config.law_cache is empty: this test chooses its own.
+    const char* env = std::getenv("DDOC_LAW_CACHE");
+    if (env != nullptr) saved_env_ = env;
+    unsetenv("DDOC_LAW_CACHE");
+  }
+  void TearDown() override {
+    fs::remove_all(dir_);
+    if (!saved_env_.empty()) setenv("DDOC_LAW_CACHE", saved_env_.c_str(), 1);
+  }
+
+  ControllerConfig Config() const {
+    ControllerConfig config;
+    config.law_cache = dir_.string();
+    return config;
+  }
+
+  fs::path dir_;
+  std::string saved_env_;
+};
+
+bool StartsWith(const std::string& s, const std::string& prefix) {
+  return s.compare(0, prefix.size(), prefix) == 0;
+}
+
+// The inputs written by the robot's controller over `hops` hops (its law, learning and all),
+// with the controller's report of where u^0 came from.
+struct Recorded {
+  std::vector<double> ctrl;
+  std::vector<double> costs;
+  double model_cost = 0.0;
+  int model_iterations = 0;
+  std::string status;
+};
+
+Recorded RunHops(const ControllerConfig& config, int hops) {
+  Robot rig("hopper_m8.xml", config, false);
+  Recorded run;
+  if (!rig.ok()) return run;
+  run.model_cost = rig.c().model_cost();
+  run.model_iterations = rig.c().model_iterations();
+  run.status = rig.c().law_cache_status();
+  while (static_cast<int>(run.costs.size()) < hops && rig.d()->time < 10.0) {
+    rig.Step();
+    for (int i = 0; i < rig.m()->nu; ++i) run.ctrl.push_back(rig.d()->ctrl[i]);
+    for (const HopReport& r : rig.c().TakeReports()) run.costs.push_back(r.cost);
+  }
+  return run;
+}
+
+TEST_F(LawCacheTest, ALoadedLawRunsBitwiseLikeTheSolvedOne) {
+  ControllerConfig off = Config();
+  off.law_cache.clear();
+  const Recorded solved = RunHops(off, 3);
+  ASSERT_EQ(solved.status, "solved");
+  ASSERT_EQ(solved.costs.size(), 3u);
+
+  const Recorded stored = RunHops(Config(), 3);
+  const std::string file = InitialLawPath(dir_.string(), InitialLawKey(Config()));
+  EXPECT_EQ(stored.status, "stored " + file);
+  ASSERT_TRUE(fs::exists(file));
+  const Recorded loaded = RunHops(Config(), 3);
+  EXPECT_EQ(loaded.status, "loaded " + file);
+  for (const Recorded* r : {&stored, &loaded}) {
+    EXPECT_EQ(r->model_cost, solved.model_cost);
+    EXPECT_EQ(r->model_iterations, solved.model_iterations);
+    EXPECT_EQ(r->costs, solved.costs);
+    EXPECT_TRUE(r->ctrl == solved.ctrl) << "the inputs differ";
+  }
+}
+
+TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
+  const ControllerConfig base = Config();
+  const std::string key = InitialLawKey(base);
+  ASSERT_FALSE(key.empty()) << "no GNU build id found";
+  EXPECT_NE(key.find("build_id.code="), std::string::npos) << key;
+  std::vector<std::pair<const char*, void (*)(ControllerConfig*)>> changes = {
+      {"model.M", [](ControllerConfig* c) { c->model.M = 10.0 + 1e-12; }},
+      {"model.c_d", [](ControllerConfig* c) { c->model.c_d = 0.01; }},
+      {"cost.q_diag", [](ControllerConfig* c) { c->cost_weights.q_diag(8) = 11.0; }},
+      {"gait.forward_speed", [](ControllerConfig* c) { c->gait.forward_speed = 0.3; }},
+      {"durations.stance_max", [](ControllerConfig* c) { c->durations.stance_max = 0.9; }},
+      {"ocfb_alpha", [](ControllerConfig* c) { c->ocfb_alpha = 0.5; }},
+      {"dt_model", [](ControllerConfig* c) { c->dt_model = 2e-3; }},
+      {"learner.c", [](ControllerConfig* c) { c->model_learner.c = 1e-6; }},
+      {"backward.cyclic_value", [](ControllerConfig* c) { c->model_learner.backward.cyclic_value = 0.9; }},
+      {"qp.tolerance", [](ControllerConfig* c) { c->model_learner.controller.qp.tolerance = 1e-10; }},
+      {"state_feedback_scale",
+       [](ControllerConfig* c) {
+         c->model_learner.controller.state_feedback_scale = {Vector::Ones(14), Vector::Ones(10)};
+       }},
+  };
+  for (const auto& [name, change] : changes) {
+    ControllerConfig changed = base;
+    change(&changed);
+    EXPECT_NE(InitialLawKey(changed), key) << name;
+    EXPECT_NE(InitialLawPath("d", InitialLawKey(changed)), InitialLawPath("d", key)) << name;
+  }
+  // What the model solve does not read leaves the key as it is.
+  ControllerConfig other = base;
+  other.driver.method = Method::kOcfb;
+  other.offline_latency = 0.0;
+  other.anchor_reference = false;
+  other.law_cache = "elsewhere";
+  EXPECT_EQ(InitialLawKey(other), key);
+}
+
+TEST_F(LawCacheTest, AnUnusableFileIsSolvedAgainAndReplaced) {
+  const Recorded reference = RunHops(Config(), 2);
+  const std::string file = InitialLawPath(dir_.string(), InitialLawKey(Config()));
+  ASSERT_EQ(reference.status, "stored " + file);
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_GT(bytes.size(), 1000u);
+  auto write = [&file](const std::string& data) {
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << data;
+  };
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  std::string other_key = InitialLawKey(Config());
+  other_key[other_key.size() - 2] ^= 1;  // a law stored for another key, under this file name
+  StoredInitialLaw law;
+  std::string why;
+  ASSERT_TRUE(ReadInitialLaw(dir_.string(), InitialLawKey(Config()), &law, &why)) << why;
+  ASSERT_TRUE(WriteInitialLaw((dir_ / "other").string(), other_key, law, &why)) << why;
+  std::string foreign;
+  {
+    std::ifstream in(InitialLawPath((dir_ / "other").string(), other_key), std::ios::binary);
+    foreign.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // Each way a file can be unusable is read as no law, with the reason.
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {flipped, "checksum mismatch (truncated or corrupt)"},
+      {bytes.substr(0, bytes.size() / 3), "checksum mismatch (truncated or corrupt)"},
+      {std::string("DDOC"), "truncated file"},
+      {std::string(bytes.size(), 'x'), "not a ddoc law file"},
+      {foreign, "stored for another key"},
+  };
+  for (const auto& [data, reason] : cases) {
+    write(data);
+    EXPECT_FALSE(ReadInitialLaw(dir_.string(), InitialLawKey(Config()), &law, &why)) << reason;
+    EXPECT_EQ(why, reason);
+  }
+  // A well-formed file whose law the controller rejects (a NaN gain): the controller solves,
+  // runs as before and replaces the file. One case only: each solve takes seconds, more under
+  // the sanitizers.
+  write(bytes);
+  ASSERT_TRUE(ReadInitialLaw(dir_.string(), InitialLawKey(Config()), &law, &why)) << why;
+  law.law.Kx(5, 7) = std::numeric_limits<double>::quiet_NaN();
+  ASSERT_TRUE(WriteInitialLaw(dir_.string(), InitialLawKey(Config()), law, &why)) << why;
+  const Recorded run = RunHops(Config(), 2);
+  EXPECT_EQ(run.status, "stored " + file + " (" + file +
+                            ": OnlineController::ImportLaw: Kx has a non-finite entry)");
+  EXPECT_EQ(run.costs, reference.costs);
+  EXPECT_TRUE(run.ctrl == reference.ctrl);
+  EXPECT_EQ(RunHops(Config(), 0).status, "loaded " + file);
+}
+
+TEST_F(LawCacheTest, AnUnwritableDirectoryOnlyMeansSolving) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / "a_file") << "not a directory";
+  ControllerConfig config = Config();
+  config.law_cache = (dir_ / "a_file").string();
+  const Recorded run = RunHops(config, 1);
+  EXPECT_TRUE(StartsWith(run.status, "solved; not stored: cannot create ")) << run.status;
+  EXPECT_EQ(run.costs.size(), 1u);
+}
+
+}  // namespace
+}  // namespace ddoc::plugin
