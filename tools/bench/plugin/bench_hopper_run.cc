@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -42,10 +43,12 @@ struct Robot {
   ddoc::MjDataPtr data{mj_makeData(model.get())};
 };
 
-std::unique_ptr<HopperController> MakeController(const mjModel* m, bool worker_thread) {
+std::unique_ptr<HopperController> MakeController(const mjModel* m, bool worker_thread,
+                                                 const std::string& law_cache = "") {
   ddoc::plugin::ControllerConfig config;  // the default scenario: inexact 10 kg drag-free model
   config.gait.forward_speed = 0.5;
   config.offline_thread = worker_thread;
+  config.law_cache = law_cache;
   std::string error;
   auto c = HopperController::Create(m, config, &error);
   if (!c) throw std::runtime_error(error);
@@ -206,6 +209,36 @@ void BM_ControllerCreate(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(MakeController(r.model.get(), false));
 }
 BENCHMARK(BM_ControllerCreate)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// Create with the law cache: the first Create solves and stores u^0 (store_ms), the timed ones
+// load it; ratio = load / solve-and-store, measured in the same run.
+void BM_ControllerCreateFromLawCache(benchmark::State& state) {
+  Robot r;
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "ddoc_bench_law_cache";
+  std::filesystem::remove_all(dir);
+  const auto t0 = std::chrono::steady_clock::now();
+  auto first = MakeController(r.model.get(), false, dir.string());
+  const double store_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (first->law_cache_status().rfind("stored ", 0) != 0) {
+    state.SkipWithError(("not stored: " + first->law_cache_status()).c_str());
+    return;
+  }
+  double load_s = 0;
+  for (auto _ : state) {
+    const auto t1 = std::chrono::steady_clock::now();
+    auto c = MakeController(r.model.get(), false, dir.string());
+    load_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    if (c->law_cache_status().rfind("loaded ", 0) != 0) state.SkipWithError("not loaded");
+  }
+  load_s /= static_cast<double>(state.iterations());
+  state.counters["store_ms"] = 1e3 * store_s;
+  state.counters["load_ms"] = 1e3 * load_s;
+  state.counters["ratio"] = load_s / store_s;
+  std::filesystem::remove_all(dir);
+}
+BENCHMARK(BM_ControllerCreateFromLawCache)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 
