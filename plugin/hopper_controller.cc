@@ -1,13 +1,13 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "hopper_controller.h"
 
-#include "law_cache.h"
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <limits>
 #include <sstream>
+
+#include "law_cache.h"
 
 namespace ddoc::plugin {
 namespace {
