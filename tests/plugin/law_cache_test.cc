@@ -78,24 +78,19 @@ Recorded RunHops(const ControllerConfig& config, int hops) {
 }
 
 TEST_F(LawCacheTest, ALoadedLawRunsBitwiseLikeTheSolvedOne) {
-  ControllerConfig off = Config();
-  off.law_cache.clear();
-  const Recorded solved = RunHops(off, 3);
-  ASSERT_EQ(solved.status, "solved");
-  ASSERT_EQ(solved.costs.size(), 3u);
-
-  const Recorded stored = RunHops(Config(), 3);
+  // The first run solves (and stores), the second loads: the same inputs at every step.
+  const Recorded solved = RunHops(Config(), 3);
   const std::string file = InitialLawPath(dir_.string(), InitialLawKey(Config()));
-  EXPECT_EQ(stored.status, "stored " + file);
+  EXPECT_EQ(solved.status, "stored " + file);
   ASSERT_TRUE(fs::exists(file));
+  ASSERT_EQ(solved.costs.size(), 3u);
   const Recorded loaded = RunHops(Config(), 3);
   EXPECT_EQ(loaded.status, "loaded " + file);
-  for (const Recorded* r : {&stored, &loaded}) {
-    EXPECT_EQ(r->model_cost, solved.model_cost);
-    EXPECT_EQ(r->model_iterations, solved.model_iterations);
-    EXPECT_EQ(r->costs, solved.costs);
-    EXPECT_TRUE(r->ctrl == solved.ctrl) << "the inputs differ";
-  }
+  EXPECT_EQ(loaded.model_cost, solved.model_cost);
+  EXPECT_EQ(loaded.model_iterations, solved.model_iterations);
+  EXPECT_EQ(loaded.costs, solved.costs);
+  EXPECT_EQ(loaded.ctrl.size(), solved.ctrl.size());
+  EXPECT_TRUE(loaded.ctrl == solved.ctrl) << "the inputs differ";
 }
 
 TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
