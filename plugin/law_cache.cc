@@ -5,6 +5,7 @@
 #include <link.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -14,6 +15,8 @@
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "hopper_controller.h"
 
@@ -300,6 +303,28 @@ bool Deserialize(const std::string& data, const std::string& key, StoredInitialL
   return true;
 }
 
+// Removes the oldest u0-*.law files of `dir` beyond kLawCacheCapacity, never `keep`. Errors
+// (a file another process removed first, say) are ignored.
+void PruneLaws(const std::string& dir, const std::string& keep) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<fs::file_time_type, fs::path>> laws;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() != 23 || name.compare(0, 3, "u0-") != 0 ||
+        name.compare(name.size() - 4, 4, ".law") != 0 || it->path() == fs::path(keep)) {
+      continue;
+    }
+    std::error_code time_ec;
+    const fs::file_time_type t = fs::last_write_time(it->path(), time_ec);
+    if (!time_ec) laws.emplace_back(t, it->path());
+  }
+  const std::size_t others = kLawCacheCapacity - 1;  // and `keep`
+  if (laws.size() <= others) return;
+  std::sort(laws.begin(), laws.end());  // oldest first
+  for (std::size_t i = 0; i + others < laws.size(); ++i) fs::remove(laws[i].second, ec);
+}
+
 }  // namespace
 
 std::string InitialLawKey(const ControllerConfig& c) {
@@ -372,6 +397,8 @@ bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitia
   StoredInitialLaw law;
   if (!Deserialize(data, key, &law, why)) return false;
   *out = std::move(law);
+  std::error_code ec;  // recently used: kept longest (a failure only makes it older)
+  std::filesystem::last_write_time(path, std::filesystem::file_time_type::clock::now(), ec);
   return true;
 }
 
@@ -404,6 +431,7 @@ bool WriteInitialLaw(const std::string& dir, const std::string& key, const Store
     *why = "cannot rename " + tmp + " to " + path;
     return false;
   }
+  PruneLaws(dir, path);
   return true;
 }
 

@@ -36,8 +36,13 @@ std::string InitialLawPath(const std::string& dir, const std::string& key);
 bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitialLaw* out,
                     std::string* why);
 
+/// Laws a directory keeps: WriteInitialLaw removes the least recently used beyond this many.
+constexpr int kLawCacheCapacity = 64;
+
 /// Writes the law of `key` into `dir` (created if missing) through a temporary file and a rename,
-/// so a concurrent reader sees the old file or the whole new one. False with *why on failure.
+/// so a concurrent reader sees the old file or the whole new one, then removes the least recently
+/// used laws (by modification time; a read refreshes it) beyond kLawCacheCapacity: a rebuilt
+/// binary keys new laws, so the old ones would pile up. False with *why on failure.
 bool WriteInitialLaw(const std::string& dir, const std::string& key, const StoredInitialLaw& law,
                      std::string* why);
 

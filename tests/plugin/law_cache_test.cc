@@ -5,6 +5,7 @@
 // an unwritable directory make the controller solve (and say so), never fail or load bad data.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -181,6 +182,52 @@ TEST_F(LawCacheTest, AnUnusableFileIsSolvedAgainAndReplaced) {
   EXPECT_EQ(run.costs, reference.costs);
   EXPECT_TRUE(run.ctrl == reference.ctrl);
   EXPECT_EQ(RunHops(Config(), 0).status, "loaded " + file);
+}
+
+// A small well-formed law (two modes, two samples each, one state, one input).
+StoredInitialLaw TinyLaw() {
+  StoredInitialLaw s;
+  s.law.samples = {2, 2};
+  s.law.dT = Vector::Zero(2);
+  s.law.nominal_T = Vector::LinSpaced(2, 0.1, 0.2);
+  s.law.tau = Vector::LinSpaced(4, 0.0, 2.0);
+  for (Matrix* a : {&s.law.x, &s.law.u, &s.law.Kx, &s.law.c, &s.law.huu}) *a = Matrix::Ones(1, 4);
+  s.model_cost = 1.5;
+  s.model_iterations = 3;
+  return s;
+}
+
+TEST_F(LawCacheTest, ADirectoryKeepsTheMostRecentlyUsedLaws) {
+  const StoredInitialLaw tiny = TinyLaw();
+  std::string why;
+  const auto now = fs::file_time_type::clock::now();
+  // 70 old law files, the oldest first (key 0 a real law, the others only named like one); then
+  // key 0 is read, which makes it the most recently used.
+  ASSERT_TRUE(WriteInitialLaw(dir_.string(), "key 0", tiny, &why)) << why;
+  for (int i = 0; i < 70; ++i) {
+    const std::string file = InitialLawPath(dir_.string(), "key " + std::to_string(i));
+    if (i > 0) std::ofstream(file) << "old";
+    fs::last_write_time(file, now - std::chrono::hours(100 - i));
+  }
+  std::ofstream(dir_ / "notes.txt") << "not a law";
+  fs::last_write_time(dir_ / "notes.txt", now - std::chrono::hours(1000));
+  StoredInitialLaw read;
+  ASSERT_TRUE(ReadInitialLaw(dir_.string(), "key 0", &read, &why)) << why;
+  EXPECT_EQ(read.model_cost, 1.5);
+  EXPECT_EQ(read.law.Kx, tiny.law.Kx);
+  ASSERT_TRUE(WriteInitialLaw(dir_.string(), "new key", tiny, &why)) << why;
+  int laws = 0;
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    laws += entry.path().extension() == ".law" ? 1 : 0;
+  }
+  EXPECT_EQ(laws, kLawCacheCapacity);
+  EXPECT_TRUE(fs::exists(InitialLawPath(dir_.string(), "new key")));
+  EXPECT_TRUE(fs::exists(InitialLawPath(dir_.string(), "key 0")));  // read: recently used
+  for (int i = 1; i <= 7; ++i) {  // 71 laws: the 7 least recently used went
+    EXPECT_FALSE(fs::exists(InitialLawPath(dir_.string(), "key " + std::to_string(i)))) << i;
+  }
+  EXPECT_TRUE(fs::exists(InitialLawPath(dir_.string(), "key 8")));
+  EXPECT_TRUE(fs::exists(dir_ / "notes.txt"));  // not a law: never removed
 }
 
 TEST_F(LawCacheTest, AnUnwritableDirectoryOnlyMeansSolving) {
