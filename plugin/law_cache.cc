@@ -213,7 +213,9 @@ class Reader {
   std::size_t pos_ = 0;
 };
 
-std::string Serialize(const std::string& key, const StoredInitialLaw& s) {
+}  // namespace
+
+std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& s) {
   const OnlineControllerLaw& l = s.law;
   std::string out(kMagic, sizeof(kMagic));
   Put(&out, kFormat);
@@ -232,12 +234,12 @@ std::string Serialize(const std::string& key, const StoredInitialLaw& s) {
   Put(&out, static_cast<std::int32_t>(l.u.rows()));
   PutArray(&out, l.tau.data(), l.tau.size());
   for (const Matrix* a : {&l.x, &l.u, &l.Kx, &l.c, &l.huu}) PutArray(&out, a->data(), a->size());
-  Put(&out, Fnv1a(out.data(), out.size()));
+  Put(&out, LawFileChecksum(out.data(), out.size()));
   return out;
 }
 
-bool Deserialize(const std::string& data, const std::string& key, StoredInitialLaw* s,
-                 std::string* why) {
+bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInitialLaw* s,
+                     std::string* why) {
   auto fail = [why](const char* what) {
     *why = what;
     return false;
@@ -247,7 +249,7 @@ bool Deserialize(const std::string& data, const std::string& key, StoredInitialL
   const std::size_t body = data.size() - sizeof(sum);
   std::memcpy(&sum, data.data() + body, sizeof(sum));
   if (std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) return fail("not a ddoc law file");
-  if (Fnv1a(data.data(), body) != sum) return fail("checksum mismatch (truncated or corrupt)");
+  if (LawFileChecksum(data.data(), body) != sum) return fail("checksum mismatch (truncated or corrupt)");
   Reader r(data, body);
   char magic[sizeof(kMagic)];
   std::uint32_t format = 0;
@@ -302,6 +304,10 @@ bool Deserialize(const std::string& data, const std::string& key, StoredInitialL
   if (!std::isfinite(s->model_cost)) return fail("non-finite model cost");
   return true;
 }
+
+std::uint64_t LawFileChecksum(const char* data, std::size_t size) { return Fnv1a(data, size); }
+
+namespace {
 
 // Removes the oldest u0-*.law files of `dir` beyond kLawCacheCapacity, never `keep`. Errors
 // (a file another process removed first, say) are ignored.
@@ -395,7 +401,7 @@ bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitia
     return false;
   }
   StoredInitialLaw law;
-  if (!Deserialize(data, key, &law, why)) return false;
+  if (!ParseInitialLaw(data, key, &law, why)) return false;
   *out = std::move(law);
   std::error_code ec;  // recently used: kept longest (a failure only makes it older)
   std::filesystem::last_write_time(path, std::filesystem::file_time_type::clock::now(), ec);
@@ -414,7 +420,7 @@ bool WriteInitialLaw(const std::string& dir, const std::string& key, const Store
   const std::string path = InitialLawPath(dir, key);
   const std::string tmp =
       path + ".tmp" + std::to_string(getpid()) + "-" + std::to_string(counter++);
-  const std::string data = Serialize(key, law);
+  const std::string data = SerializeInitialLaw(key, law);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out.write(data.data(), static_cast<std::streamsize>(data.size()));

@@ -7,6 +7,8 @@
 #ifndef DDOC_PLUGIN_LAW_CACHE_H_
 #define DDOC_PLUGIN_LAW_CACHE_H_
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "ddoc/online_controller.h"
@@ -35,6 +37,19 @@ std::string InitialLawPath(const std::string& dir, const std::string& key);
 /// for another key", ...) when there is no usable law; the file is then left as it is.
 bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitialLaw* out,
                     std::string* why);
+
+/// The bytes of a law file stored for `key` (what WriteInitialLaw writes): a header, the key, the
+/// model cost and trials, the law's arrays, then LawFileChecksum of everything before it.
+std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& law);
+
+/// Parses the bytes of a law file stored for `key`. False with *why when they are not one
+/// (checksum, format, key, sizes); the sizes are checked against the length before anything is
+/// allocated. The values are ImportLaw's to check.
+bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInitialLaw* out,
+                     std::string* why);
+
+/// The checksum a law file ends with: the 64-bit FNV-1a of the bytes before it.
+std::uint64_t LawFileChecksum(const char* data, std::size_t size);
 
 /// Laws a directory keeps: WriteInitialLaw removes the least recently used beyond this many.
 constexpr int kLawCacheCapacity = 64;

@@ -40,7 +40,7 @@ seeds_of() {
 }
 
 status=0
-for target in fuzz_scenario fuzz_mjcf fuzz_flags; do
+for target in fuzz_scenario fuzz_mjcf fuzz_flags fuzz_law; do
   [ -n "$only" ] && [ "$only" != "$target" ] && continue
   bin="$bin_dir/$target"
   if [ ! -x "$bin" ]; then
