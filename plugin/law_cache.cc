@@ -249,7 +249,9 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   const std::size_t body = data.size() - sizeof(sum);
   std::memcpy(&sum, data.data() + body, sizeof(sum));
   if (std::memcmp(data.data(), kMagic, sizeof(kMagic)) != 0) return fail("not a ddoc law file");
-  if (LawFileChecksum(data.data(), body) != sum) return fail("checksum mismatch (truncated or corrupt)");
+  if (LawFileChecksum(data.data(), body) != sum) {
+    return fail("checksum mismatch (truncated or corrupt)");
+  }
   Reader r(data, body);
   char magic[sizeof(kMagic)];
   std::uint32_t format = 0;

@@ -447,7 +447,8 @@ TEST(OnlineController, ImportLawNamesTheBadFieldAndKeepsTheLoadedLaw) {
   };
   const double nan = std::numeric_limits<double>::quiet_NaN();
   expect_error("alpha", [&](OnlineControllerLaw* l) { l->alpha = nan; }, "alpha");
-  expect_error("factor", [](OnlineControllerLaw* l) { l->feedback_factor = 0.3; }, "feedback_factor");
+  expect_error(
+      "factor", [](OnlineControllerLaw* l) { l->feedback_factor = 0.3; }, "feedback_factor");
   expect_error("modes", [](OnlineControllerLaw* l) { l->samples.pop_back(); }, "samples has 1");
   expect_error("count", [](OnlineControllerLaw* l) { l->samples[1] = 1; }, "samples[1] = 1");
   expect_error("max", [](OnlineControllerLaw* l) { l->samples[0] = 2000; }, "max_samples = 1000");
@@ -455,8 +456,10 @@ TEST(OnlineController, ImportLawNamesTheBadFieldAndKeepsTheLoadedLaw) {
   expect_error("Kx", [&](OnlineControllerLaw* l) { l->Kx(3, S / 2) = nan; }, "Kx has a non-finite");
   expect_error("huu", [](OnlineControllerLaw* l) { l->huu.conservativeResize(3, Eigen::NoChange); },
                "huu is 3x");
-  expect_error("order", [&](OnlineControllerLaw* l) { std::swap(l->tau(3), l->tau(4)); }, "tau(4)");
-  expect_error("range", [&](OnlineControllerLaw* l) { l->tau(S - 1) = 2.5; }, "expected in [k, k+1]");
+  expect_error(
+      "order", [&](OnlineControllerLaw* l) { std::swap(l->tau(3), l->tau(4)); }, "tau(4)");
+  expect_error("range", [&](OnlineControllerLaw* l) { l->tau(S - 1) = 2.5; },
+               "expected in [k, k+1]");
   expect_error("duration", [](OnlineControllerLaw* l) { l->dT(1) = -5.0; },
                "planned duration of mode 1");
   ExpectSameSteps(s, target, reference);  // every failed import left the law as it was

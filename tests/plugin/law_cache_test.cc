@@ -108,8 +108,10 @@ TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
       {"ocfb_alpha", [](ControllerConfig* c) { c->ocfb_alpha = 0.5; }},
       {"dt_model", [](ControllerConfig* c) { c->dt_model = 2e-3; }},
       {"learner.c", [](ControllerConfig* c) { c->model_learner.c = 1e-6; }},
-      {"backward.cyclic_value", [](ControllerConfig* c) { c->model_learner.backward.cyclic_value = 0.9; }},
-      {"qp.tolerance", [](ControllerConfig* c) { c->model_learner.controller.qp.tolerance = 1e-10; }},
+      {"backward.cyclic_value",
+       [](ControllerConfig* c) { c->model_learner.backward.cyclic_value = 0.9; }},
+      {"qp.tolerance",
+       [](ControllerConfig* c) { c->model_learner.controller.qp.tolerance = 1e-10; }},
       {"state_feedback_scale",
        [](ControllerConfig* c) {
          c->model_learner.controller.state_feedback_scale = {Vector::Ones(14), Vector::Ones(10)};
