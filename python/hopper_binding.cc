@@ -161,7 +161,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    const py::iterable& pushes, bool no_pushes, const std::string& preset,
                    std::optional<double> offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
-                   int height, double fps) {
+                   int height, double fps, const std::string& law_cache) {
   app::RunOverrides overrides;
   overrides.method = method;
   overrides.hops = hops;
@@ -173,6 +173,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   overrides.no_pushes = no_pushes;
   overrides.preset = preset;
   overrides.offline_latency = offline_latency;
+  overrides.law_cache = law_cache;
   if (log_every < 0) throw py::value_error("log_every must be >= 0, got " + std::to_string(log_every));
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) {
     throw py::value_error("progress: expected a callable or None");
@@ -268,6 +269,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   out["fall_reason"] = fall_reason;
   out["sim_time"] = run.data->time;
   out["frames"] = frame_count;
+  out["initial_law"] = run.controller->law_cache_status();
   if (interrupted) {
     py::object cls = py::module_::import("ddoc").attr("SolveInterrupted");
     py::object exc = cls("run_hopper interrupted after " + std::to_string(hop_table[0].size()) +
@@ -293,7 +295,7 @@ void BindHopper(py::module_& mod) {
           py::arg("no_pushes") = false, py::arg("preset") = "",
           py::arg("offline_latency") = py::none(), py::arg("log_every") = 1,
           py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
-          py::arg("height") = 480, py::arg("fps") = 60.0,
+          py::arg("height") = 480, py::arg("fps") = 60.0, py::arg("law_cache") = "",
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
 The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
@@ -311,13 +313,15 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    an exception raised in it ends the run and propagates
   render_dir, width, height, fps  PNG frames, as --render/--width/--height/--fps (only when
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
+  law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
 learner_cost, nominal_cost, predicted, optimality); 'trajectory', a
 dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
-sim_time and frames (PNG files written). ddoc.to_dataframe turns either table into a pandas
+sim_time, frames (PNG files written) and initial_law (where u^0 came from, as summary.json's
+initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
 ddoc.SolveInterrupted with the partial result in .result.)");
 }

@@ -91,6 +91,19 @@ def test_run_hopper_pushes_as_numbers_equal_strings():
     assert len(numbers["trajectory"]["t"]) == 0  # log_every=0: no trajectory
 
 
+def test_run_hopper_law_cache(tmp_path):
+    # The first run solves u^0 and stores it, the second loads it: the same table.
+    kw = dict(method="alg1", hops=2, log_every=0, law_cache=str(tmp_path / "laws"))
+    first = ddoc.run_hopper(SCENARIO, **kw)
+    second = ddoc.run_hopper(SCENARIO, **kw)
+    laws = list((tmp_path / "laws").glob("u0-*.law"))
+    assert len(laws) == 1
+    assert first["initial_law"] == "stored " + str(laws[0])
+    assert second["initial_law"] == "loaded " + str(laws[0])
+    for name, _ in FORMATS:
+        np.testing.assert_array_equal(first[name], second[name], err_msg=name)
+
+
 def test_run_hopper_log_every():
     every = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1)["trajectory"]
     tenth = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, log_every=10)["trajectory"]
@@ -104,7 +117,7 @@ def test_run_hopper_progress_rows_and_exception():
     assert [r["hop"] for r in rows] == [0, 1, 2]
     for i, row in enumerate(rows):
         assert set(row) == {name for name in table if name not in (
-            "trajectory", "method", "fell", "fall_reason", "sim_time", "frames")}
+            "trajectory", "method", "fell", "fall_reason", "sim_time", "frames", "initial_law")}
         for name, value in row.items():
             assert value == table[name][i], (i, name)
 
