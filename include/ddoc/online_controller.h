@@ -140,6 +140,9 @@ class OnlineController : public Policy {
   void Accumulate(int k, double tau);
   // planned_T_ = nominal_T_ + dT_ and planned_durations_ from it.
   void PlanDurations();
+  // Throws InvalidArgument naming `who` when a duration of T = nominal_T + dT is not > 0.
+  void CheckPlannedDurations(const ConstVectorRef& nominal_T, const ConstVectorRef& dT,
+                             const char* who) const;
 
   const Problem* problem_ = nullptr;
   OnlineControllerSettings settings_;

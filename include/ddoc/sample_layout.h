@@ -27,8 +27,11 @@ class SampleLayout {
   /// in total. Allocation-free. Returns the total number of samples.
   int Assign(const Trajectory& trajectory, const char* who);
 
-  /// Takes the sample counts N_k directly (K of them, each >= 2, at most max_samples in total),
-  /// with the same checks and messages as Assign. Allocation-free. Returns the total.
+  /// The total of the sample counts N_k, checked without changing the layout: K of them, each
+  /// >= 2, at most max_samples in all; else throws InvalidArgument naming `who` and the count.
+  int CheckCounts(const std::vector<int>& counts, const char* who) const;
+  /// Takes the sample counts N_k directly (checked as CheckCounts). Allocation-free. Returns the
+  /// total.
   int AssignCounts(const std::vector<int>& counts, const char* who);
 
   int num_modes() const { return static_cast<int>(dims_.size()); }  ///< K

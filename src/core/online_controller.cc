@@ -109,16 +109,10 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   // The convention of the equation: alpha on all of b (the paper) or on the feed-forward.
   const bool scale_all = pass.alpha_scales_feedback();
   feedback_factor_ = scale_all ? alpha : 1.0;
+  CheckPlannedDurations(nominal.T, dT, "OnlineController::Load");
   dT_ = dT;
   nominal_T_ = nominal.T;
   PlanDurations();
-  for (int k = 0; k < K_; ++k) {
-    if (!(planned_durations_(k) > 0)) {
-      throw InvalidArgument("OnlineController::Load: planned duration of mode " +
-                            std::to_string(k) + " is " + std::to_string(planned_durations_(k)) +
-                            ", expected > 0");
-    }
-  }
   for (int k = 0; k < K_; ++k) {
     const int n = layout_.dim(k);
     for (int j = 0; j < layout_.count(k); ++j) {
@@ -143,6 +137,19 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
   }
   loaded_ = true;
   BeginTrial();
+}
+
+void OnlineController::CheckPlannedDurations(const ConstVectorRef& nominal_T,
+                                             const ConstVectorRef& dT, const char* who) const {
+  double previous = 0.0;
+  for (int k = 0; k < K_; ++k) {
+    const double planned = nominal_T(k) + dT(k);
+    if (!(planned - previous > 0)) {
+      throw InvalidArgument(std::string(who) + ": planned duration of mode " + std::to_string(k) +
+                            " is " + std::to_string(planned - previous) + ", expected > 0");
+    }
+    previous = planned;
+  }
 }
 
 void OnlineController::PlanDurations() {
@@ -183,23 +190,7 @@ void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
   if (law.feedback_factor != law.alpha && law.feedback_factor != 1.0) {
     fail("feedback_factor = " + std::to_string(law.feedback_factor) + ", expected alpha or 1");
   }
-  if (static_cast<int>(law.samples.size()) != K_) {
-    fail("samples has " + std::to_string(law.samples.size()) + " entries, expected K = " +
-         std::to_string(K_));
-  }
-  long total = 0;
-  for (int k = 0; k < K_; ++k) {
-    if (law.samples[k] < 2) {
-      fail("samples[" + std::to_string(k) + "] = " + std::to_string(law.samples[k]) +
-           ", expected >= 2");
-    }
-    total += law.samples[k];
-  }
-  if (total > layout_.max_samples()) {
-    fail(std::to_string(total) + " samples, more than max_samples = " +
-         std::to_string(layout_.max_samples()));
-  }
-  const int S = static_cast<int>(total);
+  const int S = layout_.CheckCounts(law.samples, "OnlineController::ImportLaw");
   auto check = [&](const char* name, const auto& a, Eigen::Index rows, Eigen::Index cols) {
     if (a.rows() != rows || a.cols() != cols) {
       fail(std::string(name) + " is " + std::to_string(a.rows()) + "x" +
@@ -216,14 +207,8 @@ void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
   check("Kx", law.Kx, static_cast<Eigen::Index>(m_) * n_max_, S);
   check("c", law.c, m_, S);
   check("huu", law.huu, static_cast<Eigen::Index>(m_) * m_, S);
-  double previous_T = 0.0;
+  CheckPlannedDurations(law.nominal_T, law.dT, "OnlineController::ImportLaw");
   for (int k = 0, s = 0; k < K_; ++k) {
-    const double planned = law.nominal_T(k) + law.dT(k);
-    if (!(planned - previous_T > 0)) {
-      fail("planned duration of mode " + std::to_string(k) + " is " +
-           std::to_string(planned - previous_T) + ", expected > 0");
-    }
-    previous_T = planned;
     for (int j = 0; j < law.samples[k]; ++j, ++s) {
       const double tau = law.tau(s);
       if (tau < k || tau > k + 1 || (j > 0 && tau < law.tau(s - 1))) {

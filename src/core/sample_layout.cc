@@ -44,19 +44,30 @@ int SampleLayout::Assign(const Trajectory& trajectory, const char* who) {
   return Commit("trajectory", who);
 }
 
-int SampleLayout::AssignCounts(const std::vector<int>& counts, const char* who) {
+int SampleLayout::CheckCounts(const std::vector<int>& counts, const char* who) const {
   const int K = num_modes();
   if (static_cast<int>(counts.size()) != K) {
-    throw InvalidArgument(std::string(who) + ": " + std::to_string(counts.size()) +
-                          " sample counts, expected K = " + std::to_string(K));
+    throw InvalidArgument(std::string(who) + ": samples has " + std::to_string(counts.size()) +
+                          " entries, expected K = " + std::to_string(K));
   }
+  long total = 0;
   for (int k = 0; k < K; ++k) {
     if (counts[k] < 2) {
-      throw InvalidArgument(std::string(who) + ": mode " + std::to_string(k) + " has " +
-                            std::to_string(counts[k]) + " samples, expected >= 2");
+      throw InvalidArgument(std::string(who) + ": samples[" + std::to_string(k) + "] = " +
+                            std::to_string(counts[k]) + ", expected >= 2");
     }
+    total += counts[k];
   }
-  for (int k = 0; k < K; ++k) counts_[k] = counts[k];
+  if (total > max_samples_) {
+    throw InvalidArgument(std::string(who) + ": " + std::to_string(total) +
+                          " samples, more than max_samples = " + std::to_string(max_samples_));
+  }
+  return static_cast<int>(total);
+}
+
+int SampleLayout::AssignCounts(const std::vector<int>& counts, const char* who) {
+  CheckCounts(counts, who);
+  for (int k = 0; k < num_modes(); ++k) counts_[k] = counts[k];
   return Commit("law", who);
 }
 
