@@ -125,13 +125,14 @@ bool HopperController::LoadInitialLaw() {
   law_key_ = InitialLawKey(config_);
   if (law_key_.empty()) {
     law_cache_status_ = "solved; not stored: no GNU build id to key the law by";
+    law_cache_trouble_ = true;
     return false;
   }
   StoredInitialLaw stored;
   std::string why;
   const std::string path = InitialLawPath(config_.law_cache, law_key_);
   if (!ReadInitialLaw(config_.law_cache, law_key_, &stored, &why)) {
-    if (why != "no file") law_unusable_ = " (" + path + ": " + why + ")";
+    if (why != "no file") SetLawUnusable(path, why);
     return false;
   }
   try {
@@ -139,7 +140,7 @@ bool HopperController::LoadInitialLaw() {
                        config_.model_learner.controller);
     fallback_.ImportLaw(stored.law);
   } catch (const InvalidArgument& e) {
-    law_unusable_ = " (" + path + ": " + e.what() + ")";
+    SetLawUnusable(path, e.what());
     return false;
   }
   cost_.SetReference(gait_.x0);  // as SolveFromGait leaves it
@@ -147,6 +148,11 @@ bool HopperController::LoadInitialLaw() {
   model_iterations_ = stored.model_iterations;
   law_cache_status_ = "loaded " + path;
   return true;
+}
+
+void HopperController::SetLawUnusable(const std::string& path, const std::string& why) {
+  law_unusable_ = " (" + path + ": " + why + ")";
+  law_cache_trouble_ = true;
 }
 
 void HopperController::StoreInitialLaw() {
@@ -160,6 +166,7 @@ void HopperController::StoreInitialLaw() {
     law_cache_status_ = "stored " + InitialLawPath(config_.law_cache, law_key_) + law_unusable_;
   } else {
     law_cache_status_ = "solved; not stored: " + why + law_unusable_;
+    law_cache_trouble_ = true;
   }
 }
 

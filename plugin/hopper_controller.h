@@ -139,6 +139,8 @@ class HopperController {
   /// Where u^0 came from: "solved" (no law_cache), "loaded <file>", "stored <file>", or "solved;
   /// not stored: <why>"; a stored file that could not be used adds " (<file>: <why>)".
   const std::string& law_cache_status() const { return law_cache_status_; }
+  /// True when the law cache could not store u^0 or held a file it could not use.
+  bool law_cache_trouble() const { return law_cache_trouble_; }
   /// Set when the controller caught an internal error (the message says what failed); it then
   /// holds the last safe input until Reset.
   bool failed() const { return failed_; }
@@ -161,6 +163,8 @@ class HopperController {
   bool LoadInitialLaw();
   // Stores the solved u^0 into config_.law_cache (when set); sets law_cache_status_.
   void StoreInitialLaw();
+  // Notes that the stored law in `path` could not be used (solved instead).
+  void SetLawUnusable(const std::string& path, const std::string& why);
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void Step(const mjData* d);
   void Touchdown(double t);
@@ -191,6 +195,7 @@ class HopperController {
   std::string law_cache_status_ = "solved";
   std::string law_key_;       // InitialLawKey of config_ when law_cache is set
   std::string law_unusable_;  // " (<file>: <why>)" when a stored law could not be used
+  bool law_cache_trouble_ = false;
   std::vector<Vector> pitch_scale_;  // PitchFeedbackExperiment: per mode, empty when off
 
   // Per-step state (Compute).

@@ -236,8 +236,8 @@ def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
     (hop, phase, force, duration) or the --push strings, no_pushes, preset "default" | "paper",
     offline_latency, log_every, law_cache); progress(row) after every hop; PNG frames into
     render_dir when HAVE_RENDER. Returns the columns of hops.csv as NumPy arrays, 'trajectory'
-    (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law. Ctrl-C raises SolveInterrupted
-    with the partial result."""
+    (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law.
+    Ctrl-C raises SolveInterrupted with the partial result."""
     ...
 
 def to_dataframe(table: Dict[str, Any]) -> Any:

@@ -167,9 +167,8 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
   summary_.offline_latency_s = run->config.offline_latency;
   summary_.initial_law = run->controller->law_cache_status();
   // A law cache that could not be written, or held a file it could not use, is worth a line.
-  const std::string& law = summary_.initial_law;
-  if (law.rfind("solved; ", 0) == 0 || law.find(" (") != std::string::npos) {
-    std::fprintf(stderr, "ddoc-hopper: law cache: %s\n", law.c_str());
+  if (run->controller->law_cache_trouble()) {
+    std::fprintf(stderr, "ddoc-hopper: law cache: %s\n", summary_.initial_law.c_str());
   }
   summary_.pushes = s.pushes;
   summary_.hop_pushes = s.hop_pushes;

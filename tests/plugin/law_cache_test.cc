@@ -61,6 +61,7 @@ struct Recorded {
   double model_cost = 0.0;
   int model_iterations = 0;
   std::string status;
+  bool trouble = false;  // law_cache_trouble()
 };
 
 Recorded RunHops(const ControllerConfig& config, int hops) {
@@ -70,6 +71,7 @@ Recorded RunHops(const ControllerConfig& config, int hops) {
   run.model_cost = rig.c().model_cost();
   run.model_iterations = rig.c().model_iterations();
   run.status = rig.c().law_cache_status();
+  run.trouble = rig.c().law_cache_trouble();
   while (static_cast<int>(run.costs.size()) < hops && rig.d()->time < 10.0) {
     rig.Step();
     for (int i = 0; i < rig.m()->nu; ++i) run.ctrl.push_back(rig.d()->ctrl[i]);
@@ -87,6 +89,8 @@ TEST_F(LawCacheTest, ALoadedLawRunsBitwiseLikeTheSolvedOne) {
   ASSERT_EQ(solved.costs.size(), 3u);
   const Recorded loaded = RunHops(Config(), 3);
   EXPECT_EQ(loaded.status, "loaded " + file);
+  EXPECT_FALSE(solved.trouble);
+  EXPECT_FALSE(loaded.trouble);
   EXPECT_EQ(loaded.model_cost, solved.model_cost);
   EXPECT_EQ(loaded.model_iterations, solved.model_iterations);
   EXPECT_EQ(loaded.costs, solved.costs);
@@ -181,6 +185,7 @@ TEST_F(LawCacheTest, AnUnusableFileIsSolvedAgainAndReplaced) {
   const Recorded run = RunHops(Config(), 2);
   EXPECT_EQ(run.status, "stored " + file + " (" + file +
                             ": OnlineController::ImportLaw: Kx has a non-finite entry)");
+  EXPECT_TRUE(run.trouble);
   EXPECT_EQ(run.costs, reference.costs);
   EXPECT_TRUE(run.ctrl == reference.ctrl);
   EXPECT_EQ(RunHops(Config(), 0).status, "loaded " + file);
@@ -239,6 +244,7 @@ TEST_F(LawCacheTest, AnUnwritableDirectoryOnlyMeansSolving) {
   config.law_cache = (dir_ / "a_file").string();
   const Recorded run = RunHops(config, 1);
   EXPECT_TRUE(StartsWith(run.status, "solved; not stored: cannot create ")) << run.status;
+  EXPECT_TRUE(run.trouble);
   EXPECT_EQ(run.costs.size(), 1u);
 }
 
