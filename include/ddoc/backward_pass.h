@@ -37,13 +37,17 @@ enum class BackwardIntegrator {
   kRk4        ///< classical RK4 (4 stages), for stiff Riccati equations
 };
 
+/// box_aware: a nominal input within this fraction of its range (of 1 when the range is below 1
+/// or infinite) of a bound is on the bound (free only if its step points inward). Default 1e-9.
+constexpr double kOnBoundTolerance = 1e-9;
+
 /// Settings of BackwardPass. Presets: LearnerSettings{} (kRiccati, time_curvature) and
 /// LearnerSettings::Paper() (kLyapunov, use_previous_du).
 struct BackwardPassSettings {
   BackwardEquation equation = BackwardEquation::kRiccati;  ///< default kRiccati
   BackwardIntegrator integrator = BackwardIntegrator::kMidpoint;  ///< default midpoint
   /// kRiccati: the free set of each interval's full step enters P and p (clamped inputs get no
-  /// feedback; default true). false: the unconstrained Riccati equations (the bounds act only in
+  /// feedback; an input within kOnBoundTolerance of its bound is on it; default true). false: the unconstrained Riccati equations (the bounds act only in
   /// the online QP of (33)), which the hopper's learner keeps (docs/experiments.md).
   bool box_aware = true;
   /// Exact second-order terms of the time normalization in the Hamiltonian: the curvature

@@ -224,8 +224,14 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
     c_.lo = problem_->bounds.u_min - u;
     c_.hi = problem_->bounds.u_max - u;
     // A nominal input on (or, measured, slightly beyond) its bound: the step may not leave it.
-    c_.lo = c_.lo.cwiseMin(0.0);
-    c_.hi = c_.hi.cwiseMax(0.0);
+    // Within kOnBoundTolerance of the range it is on the bound: rounding in the measured input
+    // must not make it free (full feedback, one side of which the plant's QP clips).
+    for (int i = 0; i < m_; ++i) {
+      const double range = problem_->bounds.u_max(i) - problem_->bounds.u_min(i);
+      const double tol = kOnBoundTolerance * (std::isfinite(range) ? std::max(1.0, range) : 1.0);
+      if (c_.lo(i) > -tol) c_.lo(i) = 0.0;
+      if (c_.hi(i) < tol) c_.hi(i) = 0.0;
+    }
   }
   du_prev_ = du_prev;
   du_index_ = index(k, j);

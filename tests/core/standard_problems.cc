@@ -243,6 +243,31 @@ std::vector<std::string> StandardProblemNames() {
           "exp0", "exp0_bounded", "exp1", "state_size_lq"};
 }
 
+RandomStart DrawRandomStart(const StandardProblem& sp, std::mt19937* rng) {
+  const int K = sp.num_modes();
+  std::uniform_real_distribution<double> weight(0.2, 1.0), offset(-1.0, 1.0);
+  RandomStart start;
+  start.durations.resize(K);
+  for (int k = 0; k < K; ++k) start.durations(k) = weight(*rng);
+  start.durations *= sp.final_time() / start.durations.sum();
+  for (int k = 0; k < K; ++k) {
+    start.durations(k) = std::max(start.durations(k), sp.problem.bounds.duration_min(k) + 1e-3);
+  }
+  start.durations *= sp.final_time() / start.durations.sum();
+  start.offset = offset(*rng);
+  return start;
+}
+
+FunctionPolicy RandomStartPolicy(const StandardProblem& sp, const RandomStart& start) {
+  const FunctionPolicy::Function input = sp.initial_input;
+  const double u0 = start.offset;
+  return FunctionPolicy(start.durations,
+                        [input, u0](int k, double t, const ConstVectorRef& x, VectorRef u) {
+                          input(k, t, x, u);
+                          u.array() += u0;
+                        });
+}
+
 std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
   std::unique_ptr<StandardProblem> sp;
   if (name == "lqr") {

@@ -22,6 +22,7 @@
 #define DDOC_TESTS_CORE_STANDARD_PROBLEMS_H_
 
 #include <memory>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,18 @@ std::vector<std::string> StandardProblemNames();
 
 /// Makes the named problem; throws InvalidArgument for an unknown name.
 std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name);
+
+/// An initial guess other than the suite's: planned durations drawn uniformly in [0.2, 1],
+/// scaled to the final time and kept above the duration bounds, and the suite's u^0 plus a
+/// constant drawn uniformly in [-1, 1] (docs/standard_problems.md, "From other starts").
+struct RandomStart {
+  Vector durations;    ///< K planned durations (s), summing to the final time
+  double offset = 0;   ///< added to every entry of u^0
+};
+/// Draws one RandomStart for sp (K + 1 draws from rng).
+RandomStart DrawRandomStart(const StandardProblem& sp, std::mt19937* rng);
+/// The policy of a RandomStart: sp's u^0 plus the offset, on the start's durations.
+FunctionPolicy RandomStartPolicy(const StandardProblem& sp, const RandomStart& start);
 
 // The numbers of each problem (shared with the reference solvers).
 

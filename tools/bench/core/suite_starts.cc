@@ -19,7 +19,9 @@
 namespace ddoc {
 namespace {
 
+using testing::DrawRandomStart;
 using testing::MakeStandardProblem;
+using testing::RandomStartPolicy;
 using testing::StandardProblem;
 
 struct Tally {
@@ -31,19 +33,7 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
   Tally t;
   for (int s = 0; s < starts; ++s) {
     const std::unique_ptr<StandardProblem> sp = MakeStandardProblem(name);
-    const int K = sp->num_modes();
-    std::uniform_real_distribution<double> weight(0.2, 1.0), offset(-1.0, 1.0);
-    Vector D(K);
-    for (int k = 0; k < K; ++k) D(k) = weight(*rng);
-    D *= sp->final_time() / D.sum();
-    for (int k = 0; k < K; ++k) D(k) = std::max(D(k), sp->problem.bounds.duration_min(k) + 1e-3);
-    D *= sp->final_time() / D.sum();
-    const double u0 = offset(*rng);
-    const FunctionPolicy::Function input = sp->initial_input;
-    FunctionPolicy initial(D, [input, u0](int k, double t, const ConstVectorRef& x, VectorRef u) {
-      input(k, t, x, u);
-      u.array() += u0;
-    });
+    FunctionPolicy initial = RandomStartPolicy(*sp, DrawRandomStart(*sp, rng));
     ModelPlant plant(sp->problem);
     Learner learner(sp->problem, settings);
     const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
