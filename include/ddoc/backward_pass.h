@@ -47,8 +47,9 @@ struct BackwardPassSettings {
   BackwardEquation equation = BackwardEquation::kRiccati;  ///< default kRiccati
   BackwardIntegrator integrator = BackwardIntegrator::kMidpoint;  ///< default midpoint
   /// kRiccati: the free set of each interval's full step enters P and p (clamped inputs get no
-  /// feedback; an input within kOnBoundTolerance of its bound is on it; default true). false: the unconstrained Riccati equations (the bounds act only in
-  /// the online QP of (33)), which the hopper's learner keeps (docs/experiments.md).
+  /// feedback; an input within kOnBoundTolerance of its bound is on it; default true). false:
+  /// the unconstrained Riccati equations (the bounds act only in the online QP of (33)), which
+  /// the hopper's learner keeps (docs/experiments.md).
   bool box_aware = true;
   /// Exact second-order terms of the time normalization in the Hamiltonian: the curvature
   /// p_x^T d^2 F / (dT dx) = +-p_x^T f_x and p_x^T d^2 F / (dT du) = +-p_x^T f_u (the sign of

@@ -545,19 +545,13 @@ TEST_P(StandardProblemEngine, DefaultSettingsReachTheReference) {
                            << sp->reference_T.transpose();
 }
 
-// The default pass's stored step is what the plant's QP (33) can apply: inside the input box
-// at every sample, and a descent direction at its own gradient (k^T g_u <= 0). The free set of an
-// interval is fixed at its right end; its Newton step at the midpoint can leave the box (measured
-// before the fix on this run: a step of -3.66 on an input at its lower bound), and the
-// predicted decrease then counted a step the plant clamps away. Checked on every nominal of
-// exp0_bounded run from T^0 = (1, 1) s with u^0 + 0.5.
 TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
   // exp0_bounded from 12 random initial guesses (DrawRandomStart), the default settings, the
   // trial budget of the suite. Its optimal input sits on the bound through all of mode 0, so
   // most nominals have many inputs on the bound; a rounding-level gap to the bound must not make
   // one free with two-sided feedback that the plant's QP clips on one side (kOnBoundTolerance).
   // Without that rule 4 of suite_starts' 12 converged and 7 reached the reference; with it, 115
-  // of 120 over four seeds (docs/standard_problems.md).
+  // of 120 over four seeds (docs/standard_problems.md). These 12: 11 reach it, 4 without the rule.
   std::mt19937 rng(7);
   int reached = 0;
   for (int start = 0; start < 12; ++start) {
@@ -578,6 +572,12 @@ TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
   EXPECT_GE(reached, 11) << "of 12 starts converged to the reference";
 }
 
+// The default pass's stored step is what the plant's QP (33) can apply: inside the input box
+// at every sample, and a descent direction at its own gradient (k^T g_u <= 0). The free set of an
+// interval is fixed at its right end; its Newton step at the midpoint can leave the box (measured
+// before the fix on this run: a step of -3.66 on an input at its lower bound), and the
+// predicted decrease then counted a step the plant clamps away. Checked on every nominal of
+// exp0_bounded run from T^0 = (1, 1) s with u^0 + 0.5.
 TEST(StandardProblemPass, StoredStepIsFeasibleOnEveryNominal) {
   const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0_bounded");
   const Problem& problem = sp->problem;
