@@ -7,6 +7,10 @@
 // switching instants (a converged run may sit on another stationary point of a nonconvex problem).
 //
 //   suite_starts [--starts 12] [--seed 7] [--preset default|paper] [--max-trials 100]
+//                [--only NAME] [--verbose]
+//
+// --verbose prints every start on stderr: its durations and input offset, the status, the
+// trials, the cost against I* and the switching instants against T*.
 #include <cstdio>
 #include <random>
 #include <string>
@@ -29,11 +33,12 @@ struct Tally {
 };
 
 Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
-                const LearnerSettings& settings) {
+                const LearnerSettings& settings, bool verbose) {
   Tally t;
   for (int s = 0; s < starts; ++s) {
     const std::unique_ptr<StandardProblem> sp = MakeStandardProblem(name);
-    FunctionPolicy initial = RandomStartPolicy(*sp, DrawRandomStart(*sp, rng));
+    const testing::RandomStart start = DrawRandomStart(*sp, rng);
+    FunctionPolicy initial = RandomStartPolicy(*sp, start);
     ModelPlant plant(sp->problem);
     Learner learner(sp->problem, settings);
     const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
@@ -44,6 +49,15 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
     t.at_reference += cost_error <= 1e-3 && T_error <= 1e-3;
     t.trials += r.trials;
     t.max_trials = std::max(t.max_trials, r.trials);
+    if (verbose) {
+      std::fprintf(stderr, "%s start %d: D^0 (", name.c_str(), s);
+      for (int k = 0; k < start.durations.size(); ++k) {
+        std::fprintf(stderr, "%s%.3f", k ? ", " : "", start.durations(k));
+      }
+      std::fprintf(stderr, ") s, u^0 %+.3f: %s, %d trials, cost %.6g x I*, max |T - T*| %.2e s\n",
+                   start.offset, LearnerStatusName(r.status), r.trials, r.cost / sp->reference_cost,
+                   T_error);
+    }
   }
   return t;
 }
@@ -51,18 +65,28 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
 int Main(int argc, char** argv) {
   CLI::App app("The standard problems from random starts");
   int starts = 12, seed = 7, max_trials = 100;
-  std::string preset = "default";
+  std::string preset = "default", only;
+  bool verbose = false;
   app.add_option("--starts", starts, "initial guesses per problem")->check(CLI::PositiveNumber);
   app.add_option("--seed", seed, "random seed");
   app.add_option("--preset", preset, "default | paper")->check(CLI::IsMember({"default", "paper"}));
   app.add_option("--max-trials", max_trials, "trial budget per run")->check(CLI::PositiveNumber);
+  app.add_option("--only", only, "one problem (the others still draw their starts)")
+      ->check(CLI::IsMember(testing::StandardProblemNames()));
+  app.add_flag("--verbose", verbose, "every start on stderr");
   CLI11_PARSE(app, argc, argv);
   LearnerSettings settings = preset == "paper" ? LearnerSettings::Paper() : LearnerSettings{};
   settings.max_trials = max_trials;
   std::mt19937 rng(static_cast<unsigned>(seed));
   std::printf("| problem | converged | at the reference | trials (mean, max) |\n|---|---|---|---|\n");
   for (const std::string& name : testing::StandardProblemNames()) {
-    const Tally t = RunStarts(name, starts, &rng, settings);
+    if (!only.empty() && name != only) {
+      // Draw and discard the skipped problem's starts, so --only gives the same starts.
+      const std::unique_ptr<StandardProblem> sp = MakeStandardProblem(name);
+      for (int s = 0; s < starts; ++s) DrawRandomStart(*sp, &rng);
+      continue;
+    }
+    const Tally t = RunStarts(name, starts, &rng, settings, verbose);
     std::printf("| %s | %d/%d | %d/%d | %.1f, %d |\n", name.c_str(), t.converged, t.runs,
                 t.at_reference, t.runs, static_cast<double>(t.trials) / t.runs, t.max_trials);
   }
