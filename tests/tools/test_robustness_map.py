@@ -113,6 +113,8 @@ class SummaryTest(TempDirTest):
         self.assertIn("both survive in 3 of 4 conditions; Alg1's last-10 cost <= OC-FB's in 2 of "
                       "those 3 (67 %). Beyond the hop-to-hop spread (more than two standard errors "
                       "of the last 10 hops apart): Alg1 above OC-FB in 1, below in 0.", text)
+        # exp((ln(1.0 / 1.1) + ln(1.2 / 1.2) + ln(1.5 / 1.3)) / 3) = 1.0161
+        self.assertIn("Geometric mean of Alg1's last-10 cost / OC-FB's over those 3: 1.016.", text)
         self.assertIn("| 10 | 0 | 0.5 | 100, 2 | fell @7 | fell @7 |", text)
         self.assertNotIn("Targets of issue 19", text)  # not the full grid
         for method in ("alg1", "ocfb", "mrl"):
