@@ -295,6 +295,14 @@ def load_run(path, need_trajectory=False, label=None):
 MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "models")
 
 
+def default_law_cache(env, out_dir):
+    """Sets env's DDOC_LAW_CACHE to OUT_DIR/law-cache unless it is set (empty: off) and returns
+    env. The runs of a sweep then share their u^0 laws (docs/design.md, "The law cache"); a
+    stored law runs bitwise like a solved one."""
+    env.setdefault("DDOC_LAW_CACHE", os.path.join(out_dir, "law-cache"))
+    return env
+
+
 def label(value):
     """A number as it appears in case names: 10, 10.5, 0.01."""
     return f"{value:g}"
