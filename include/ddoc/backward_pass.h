@@ -227,6 +227,7 @@ class BackwardPass {
   double mu_ = 0;
   double luu_scale_ = 0;
   bool box_ = false;  // some input bound is finite
+  Vector on_bound_tol_;  // m: kOnBoundTolerance x max(1, u_max - u_min) (1 for an infinite range)
   SampleLayout layout_;      // n_k, N_k of the last run, mode-major sample indices
   // Per-sample storage, one column per global sample (leading entries used).
   Vector tau_;         // S

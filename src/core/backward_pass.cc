@@ -56,8 +56,11 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   max_samples_ = max_samples;
   layout_.Allocate(sys, max_samples, "BackwardPass::Allocate");
   box_ = false;
+  on_bound_tol_.resize(m_);
   for (int i = 0; i < m_; ++i) {
     box_ = box_ || std::isfinite(problem.bounds.u_min(i)) || std::isfinite(problem.bounds.u_max(i));
+    const double range = problem.bounds.u_max(i) - problem.bounds.u_min(i);
+    on_bound_tol_(i) = kOnBoundTolerance * (std::isfinite(range) ? std::max(1.0, range) : 1.0);
   }
   int s_max = 1;
   for (int k = 0; k < K_; ++k) s_max = std::max(s_max, sys.surface_dim(k));
@@ -227,10 +230,8 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
     // Within kOnBoundTolerance of the range it is on the bound: rounding in the measured input
     // must not make it free (full feedback, one side of which the plant's QP clips).
     for (int i = 0; i < m_; ++i) {
-      const double range = problem_->bounds.u_max(i) - problem_->bounds.u_min(i);
-      const double tol = kOnBoundTolerance * (std::isfinite(range) ? std::max(1.0, range) : 1.0);
-      if (c_.lo(i) > -tol) c_.lo(i) = 0.0;
-      if (c_.hi(i) < tol) c_.hi(i) = 0.0;
+      if (c_.lo(i) > -on_bound_tol_(i)) c_.lo(i) = 0.0;
+      if (c_.hi(i) < on_bound_tol_(i)) c_.hi(i) = 0.0;
     }
   }
   du_prev_ = du_prev;
