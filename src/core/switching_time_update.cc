@@ -63,8 +63,10 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
   }
   *x = xb;
   // Polish: with the active set of the bisection, solve the equality-constrained KKT system
-  //   [H_FF 1; 1^T 0] [x_F; nu] = [-g_F - H_FC x_C; s - 1^T x_C]
-  // exactly, and keep it when it is feasible.
+  //   [H_FF h1; h1^T 0] [x_F; nu/h] = [-g_F - H_FC x_C; h (s - 1^T x_C)]
+  // exactly, and keep it when it is feasible. The border is scaled by h = max|H_FF|: with a
+  // border of ones and |H| ~ 1e7 the Schur pivot 1^T H_FF^-1 1 falls below FullPivLU's rank
+  // threshold, and the solve drops the sum constraint.
   std::vector<int> free;
   for (int k = 0; k < K; ++k) {
     const double w = 1e-12 * std::max(1.0, std::abs((*x)(k)));
@@ -78,6 +80,11 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
     for (int k = 0; k < K; ++k) {
       if (std::find(free.begin(), free.end(), k) == free.end()) fixed_sum += (*x)(k);
     }
+    double h = 0;
+    for (int a_i = 0; a_i < nf; ++a_i) {
+      for (int b_i = 0; b_i < nf; ++b_i) h = std::max(h, std::abs(H(free[a_i], free[b_i])));
+    }
+    if (!(h > 0) || !std::isfinite(h)) h = 1.0;
     for (int a_i = 0; a_i < nf; ++a_i) {
       const int i = free[a_i];
       double r = -g(i);
@@ -86,14 +93,19 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
       }
       rhs(a_i) = r;
       for (int b_i = 0; b_i < nf; ++b_i) kkt(a_i, b_i) = H(i, free[b_i]);
-      kkt(a_i, nf) = kkt(nf, a_i) = 1.0;
+      kkt(a_i, nf) = kkt(nf, a_i) = h;
     }
-    rhs(nf) = s - fixed_sum;
+    rhs(nf) = h * (s - fixed_sum);
     const Vector sol = kkt.fullPivLu().solve(rhs);
     bool feasible = sol.allFinite();
     for (int a_i = 0; a_i < nf && feasible; ++a_i) {
       const int i = free[a_i];
       feasible = sol(a_i) >= lo(i) && sol(a_i) <= hi(i);
+    }
+    // The polished point must meet the sum at least as well as the bisection's.
+    if (feasible) {
+      const double polished_sum = fixed_sum + sol.head(nf).sum();
+      feasible = std::abs(polished_sum - s) <= std::max(std::abs(x->sum() - s), tol);
     }
     if (feasible) {
       for (int a_i = 0; a_i < nf; ++a_i) (*x)(free[a_i]) = sol(a_i);

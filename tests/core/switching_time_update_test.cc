@@ -122,6 +122,52 @@ TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
   EXPECT_GT(sum_active, 100);
 }
 
+// The minimizer of (cH, cg) is that of (H, g) for every c > 0. The QP's polish once dropped the
+// sum constraint for |H| ~ 1e7 (its KKT border of ones fell below the LU's rank threshold).
+TEST(DurationQp, TheAnswerDoesNotDependOnTheScaleOfTheObjective) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = 2 + trial % 4;
+    Matrix M(n, n);
+    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(rng);
+    const Matrix H = M * M.transpose() + 0.05 * Matrix::Identity(n, n);
+    Vector g(n), lo(n), hi(n);
+    for (int i = 0; i < n; ++i) {
+      g(i) = 2.0 * normal(rng);
+      lo(i) = -0.5 - std::abs(normal(rng));
+      hi(i) = 0.5 + std::abs(normal(rng));
+    }
+    const Vector ref = BruteForce(H, g, lo, hi, 0.0, 0.0);
+    ASSERT_EQ(ref.size(), n) << "trial " << trial;
+    for (const double c : {1e-6, 1e3, 1e8}) {
+      Vector x;
+      SolveDurationQp(c * H, c * g, lo, hi, 0.0, 0.0, &x);
+      EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-7) << "trial " << trial << ", scale " << c;
+      EXPECT_LT(std::abs(x.sum()), 1e-9) << "trial " << trial << ", scale " << c;
+    }
+  }
+}
+
+// The duration QP that exp0 with |u| <= 3 posed at its first trial (P22 of the Lyapunov pass,
+// two modes at D = (1, 1) s, a fixed final time): H = S^T P22 S has a negative eigenvalue that
+// the spectrum floor mirrors. With the sum fixed, dD = t (1, -1), and t minimizes the
+// one-dimensional quadratic 1/2 t^2 v^T H v + t v^T g, v = (1, -1).
+TEST(DurationQp, AFixedFinalTimeHoldsWithCurvaturesOfTenMillion) {
+  Matrix H(2, 2);
+  H << 6.94782e+07, 7.06735e+07, 7.06735e+07, 7.77571e+07;
+  const Vector g = (Vector(2) << 2.89656e+06, 1.95264e+06).finished();
+  const Vector lo = Vector::Constant(2, -0.99), hi = Vector::Constant(2, 1.0);
+  const Vector v = (Vector(2) << 1.0, -1.0).finished();
+  const double t = -v.dot(g) / v.dot(H * v);
+  ASSERT_GT(t * v(0), lo(0));  // the closed form is inside the box
+  ASSERT_LT(t * v(1), hi(1));
+  Vector x;
+  SolveDurationQp(H, g, lo, hi, 0.0, 0.0, &x);
+  EXPECT_LT(std::abs(x.sum()), 1e-12);
+  EXPECT_LT((x - t * v).cwiseAbs().maxCoeff(), 1e-10);
+}
+
 // Two modes, durations in [0.1, 1], a problem for the checks below.
 struct TwoModes {
   LinearSwitchedSystem sys{{Matrix::Zero(1, 1), Matrix::Zero(1, 1)},
