@@ -141,6 +141,7 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->I("learner.delta_i", s.delta_i);
   k->D("learner.optimality_tolerance", s.optimality_tolerance);
   k->D("learner.regularization_min", s.regularization_min);
+  k->I("learner.failure_raises", s.failure_raises);
   k->B("learner.start_correction", s.start_correction);
   k->B("learner.restart_on_failure", s.restart_on_failure);
   k->D("learner.restart_alpha", s.restart_alpha);

@@ -146,6 +146,7 @@ class LearnerSettings:
     delta_i: int
     optimality_tolerance: float
     regularization_min: float
+    failure_raises: int
     max_trials: int
     max_samples: int
     backward: BackwardPassSettings

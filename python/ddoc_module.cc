@@ -919,6 +919,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readwrite("delta_i", &LearnerSettings::delta_i)
       .def_readwrite("optimality_tolerance", &LearnerSettings::optimality_tolerance)
       .def_readwrite("regularization_min", &LearnerSettings::regularization_min)
+      .def_readwrite("failure_raises", &LearnerSettings::failure_raises)
       .def_readwrite("max_trials", &LearnerSettings::max_trials)
       .def_readwrite("max_samples", &LearnerSettings::max_samples)
       .def_readwrite("backward", &LearnerSettings::backward)

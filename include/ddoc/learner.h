@@ -78,6 +78,12 @@ struct LearnerSettings {
   /// definite, non-finite), shrinks 10x after each accepted trial, never below the floor.
   /// Default 0 (the converged gain is the exact one).
   double regularization_min = 0.0;
+  /// A line search that ends (alpha < alpha_min) where it would terminate (no
+  /// restart_on_failure, or a batch Solve) first raises mu to max(10 mu, L_uu scale) and
+  /// searches again from alpha_initial around the same nominal, up to this many times in a
+  /// row (reset by an accepted trial): docs/engine.md, "A failed line search". Default 2,
+  /// Paper() 0.
+  int failure_raises = 2;
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
   /// value of the pass, dx0 = trial x0 - nominal x0) plus the nominal's cost change under the
@@ -301,6 +307,9 @@ class Learner {
   TrialResult Reported(TrialResult r) const;
   // restart_on_failure: alpha <- restart_alpha (or alpha_initial) around the same nominal.
   void RestartLineSearch(TrialResult* r);
+  // alpha < alpha_min: restart (online), raise mu and search again (failure_raises), or
+  // terminate.
+  void LineSearchExhausted(TrialResult* r);
   // remeasure_nominal: I^i <- the mean of the nominal's re-measurements, with `cost` added.
   void AddNominalSample(double cost);
   // The status after a new nominal: converged when the optimality (and step) tests hold.
@@ -330,6 +339,7 @@ class Learner {
   int iteration_ = 0;
   int trials_ = 0;
   int restarts_ = 0;
+  int failure_raises_ = 0;          // failure_raises used since the last accepted trial
   bool remeasure_pending_ = false;  // remeasure_nominal: the next trial re-runs the nominal's law
   bool remeasure_trial_ = false;    // the pending trial is such a re-measurement
   int nominal_samples_ = 0;         // re-measurements of the nominal in nominal_cost_

@@ -48,6 +48,7 @@ LearnerSettings LearnerSettings::Paper() {
   s.backward.time_curvature = false;
   s.backward.use_previous_du = true;
   s.start_correction = false;
+  s.failure_raises = 0;
   return s;
 }
 
@@ -134,6 +135,7 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   CheckSetting(settings.noise_margin >= 0 && std::isfinite(settings.noise_margin),
                "noise_margin must be finite and >= 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
+  CheckSetting(settings.failure_raises >= 0, "failure_raises must be >= 0");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
   CheckSetting(settings.convergence_tolerance >= 0 && std::isfinite(settings.convergence_tolerance),
@@ -207,6 +209,29 @@ void Learner::RestartLineSearch(TrialResult* r) {
   ++restarts_;
   r->restarted = true;
   remeasure_pending_ = settings_.remeasure_nominal;
+}
+
+void Learner::LineSearchExhausted(TrialResult* r) {
+  if (settings_.restart_on_failure && !in_solve_) {
+    RestartLineSearch(r);
+  } else if (failure_raises_ < settings_.failure_raises && luu_scale_ > 0) {
+    // Levenberg-Marquardt after a failed search (as box-constrained DDP raises mu when its
+    // forward pass fails): a larger mu shortens the step and shrinks the feedback gains K,
+    // whose clipping at the input bounds the predicted decrease does not see. Without inputs
+    // (L_uu scale 0) mu changes nothing.
+    ++failure_raises_;
+    const double mu = mu_;
+    mu_ = std::max(10.0 * mu_, luu_scale_);
+    if (RunPass()) {
+      alpha_ = settings_.alpha_initial;
+      return;
+    }
+    mu_ = mu;
+    pass_.Run(nominal_, mu_);  // restore the pass that succeeded before
+    status_ = LearnerStatus::kLineSearchFailed;
+  } else {
+    status_ = LearnerStatus::kLineSearchFailed;
+  }
 }
 
 void Learner::AddNominalSample(double cost) {
@@ -284,6 +309,7 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   alpha_ = settings_.alpha_initial;
   trials_ = 0;
   restarts_ = 0;
+  failure_raises_ = 0;
   remeasure_pending_ = false;
   remeasure_trial_ = false;
   noise_sum_ = 0;
@@ -389,13 +415,7 @@ TrialResult Learner::AbortTrial() {
     r.remeasured = true;
   } else if (status_ != LearnerStatus::kLineSearchFailed) {
     alpha_ *= settings_.interpolate_backtracking ? 0.1 : settings_.gamma;
-    if (alpha_ < settings_.alpha_min) {
-      if (settings_.restart_on_failure && !in_solve_) {
-        RestartLineSearch(&r);
-      } else {
-        status_ = LearnerStatus::kLineSearchFailed;
-      }
-    }
+    if (alpha_ < settings_.alpha_min) LineSearchExhausted(&r);
   }
   r.iteration = iteration_;
   r.status = status_;
@@ -454,6 +474,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   if (r.accepted && !AdoptTrial(measured, direction_plant, r.cost)) r.accepted = false;
   if (r.accepted) {
     ++iteration_;
+    failure_raises_ = 0;
     step_history_.push_back(r.step);
     accepted_ = active_;
     active_ = 1 - active_;
@@ -488,13 +509,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
       next = std::min(std::max(next, 0.1 * alpha_), settings_.gamma * alpha_);
     }
     alpha_ = next;
-    if (alpha_ < settings_.alpha_min) {
-      if (settings_.restart_on_failure && !in_solve_) {
-        RestartLineSearch(&r);
-      } else {
-        status_ = LearnerStatus::kLineSearchFailed;
-      }
-    }
+    if (alpha_ < settings_.alpha_min) LineSearchExhausted(&r);
   }
   return Reported(r);
 }

@@ -34,6 +34,7 @@ LearnerSettings HopperModelSolveSettings() {
   s.acceptance = Acceptance::kSufficientDecrease;  // (36) as printed, alpha / gamma after an
   s.c = 1e-7;                                      // accepted trial (docs/hopper.md)
   s.alpha_after_accept = AlphaAfterAccept::kGrow;
+  s.failure_raises = 0;  // a u^0 nearer the model's optimum is less robust (docs/hopper.md)
   return s;
 }
 

@@ -168,6 +168,7 @@ LearnerSettings RejectEveryTrial() {
   s.gamma = 0.5;
   s.interpolate_backtracking = false;
   s.alpha_min = 0.1;
+  s.failure_raises = 0;  // terminate after the first failed search
   return s;
 }
 
@@ -211,6 +212,54 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   const TrialResult aborted = other.AbortTrial();
   EXPECT_FALSE(aborted.accepted);
   EXPECT_DOUBLE_EQ(other.alpha(), 0.1);  // interpolated backtracking: the smallest factor
+}
+
+TEST(Learner, AFailedLineSearchRaisesMuAndSearchesAgainBeforeItTerminates) {
+  // (36) never holds: each search takes 4 trials (alpha 1, 0.5, 0.25, 0.125; 0.0625 < 0.1).
+  // failure_raises = 2: after the first and the second failed search mu becomes
+  // max(10 mu, L_uu scale), the pass is re-run with it and alpha returns to alpha_initial;
+  // the third failed search terminates. The nominal never changes.
+  TwoModeLq lq;
+  LqProblem p(lq);
+  ModelPlant plant(p.problem);
+  FunctionPolicy initial = ZeroInputPolicy();
+  LearnerSettings settings = RejectEveryTrial();
+  settings.failure_raises = 2;
+  Learner learner(p.problem, settings);
+  Trajectory measured;
+  plant.Run(lq.x0, initial, &measured);
+  learner.Initialize(measured);
+  const double cost0 = learner.nominal_cost();
+  const double luu = learner.backward_pass().luu_scale();
+  ASSERT_GT(luu, 0.0);
+  double mu = learner.regularization();
+  double predicted = learner.backward_pass().predicted_linear();
+  ASSERT_LT(predicted, 0.0);
+  for (int search = 0; search < 3; ++search) {
+    for (int i = 0; i < 4; ++i) {
+      ASSERT_EQ(learner.status(), LearnerStatus::kRunning) << "search " << search << ", trial " << i;
+      OnlineController& policy = learner.NextTrial();
+      EXPECT_DOUBLE_EQ(policy.alpha(), std::pow(0.5, i));
+      plant.Run(lq.x0, policy, &measured);
+      EXPECT_FALSE(learner.CompleteTrial(measured).accepted);
+      EXPECT_EQ(learner.nominal_cost(), cost0);
+    }
+    if (search < 2) {
+      mu = std::max(10.0 * mu, luu);
+      EXPECT_EQ(learner.status(), LearnerStatus::kRunning);
+      EXPECT_DOUBLE_EQ(learner.alpha(), 1.0);
+      EXPECT_DOUBLE_EQ(learner.regularization(), mu);
+      EXPECT_DOUBLE_EQ(learner.backward_pass().regularization(), mu);
+      // A larger mu predicts a smaller decrease (a shorter step).
+      const double now = learner.backward_pass().predicted_linear();
+      EXPECT_LT(now, 0.0);
+      EXPECT_GT(now, predicted);
+      predicted = now;
+    }
+  }
+  EXPECT_EQ(learner.status(), LearnerStatus::kLineSearchFailed);
+  EXPECT_EQ(learner.trials(), 12);
+  EXPECT_DOUBLE_EQ(learner.regularization(), mu);  // no third raise
 }
 
 TEST(Learner, RecomputeDirectionUsesTheChangedCostAndKeepsTheNominal) {

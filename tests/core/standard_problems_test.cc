@@ -551,7 +551,9 @@ TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
   // most nominals have many inputs on the bound; a rounding-level gap to the bound must not make
   // one free with two-sided feedback that the plant's QP clips on one side (kOnBoundTolerance).
   // Without that rule 4 of suite_starts' 12 converged and 7 reached the reference; with it, 115
-  // of 120 over four seeds (docs/standard_problems.md). These 12: 11 reach it, 4 without the rule.
+  // of 120 over four seeds, and 120 with the duration QP's fix and failure_raises
+  // (docs/standard_problems.md). These 12: all reach it; 11 without failure_raises (start 3
+  // ends its line search 490 times above I*), 4 without the rule.
   std::mt19937 rng(7);
   int reached = 0;
   for (int start = 0; start < 12; ++start) {
@@ -569,7 +571,41 @@ TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
                 LearnerStatusName(r.status), r.trials, cost_error, T_error);
     reached += ok;
   }
-  EXPECT_GE(reached, 11) << "of 12 starts converged to the reference";
+  EXPECT_EQ(reached, 12) << "of 12 starts converged to the reference";
+}
+
+TEST(StandardProblemEngine, AFailedLineSearchOnABangBangNominalRaisesTheRegularization) {
+  // One start of suite_starts (seed 7, --starts 30, the 15th of exp0_bounded's; its draw
+  // rounded to 6 digits). Its line search ends at a nominal 29 times above I* where almost
+  // every input sits on the bound: the step's measured slope is positive while (31) and the
+  // feed-forward predict a decrease, because the plant's QP clips the feedback of inputs that
+  // the pass let leave the bound. A larger mu (LearnerSettings::failure_raises) shrinks that
+  // feedback; the search from alpha_initial then goes on to the reference.
+  const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0_bounded");
+  RandomStart start;
+  start.durations = (Vector(2) << 0.945779, 1.054221).finished();
+  start.offset = -0.712817;
+  double cost[2];
+  for (const int raises : {0, 2}) {
+    FunctionPolicy initial = RandomStartPolicy(*sp, start);
+    LearnerSettings settings;
+    settings.failure_raises = raises;
+    settings.max_trials = sp->trial_budget();
+    ModelPlant plant(sp->problem);
+    Learner learner(sp->problem, settings);
+    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    std::printf("failure_raises %d: %s, trials %d, cost %.6g x I*\n", raises,
+                LearnerStatusName(r.status), r.trials, r.cost / sp->reference_cost);
+    cost[raises ? 1 : 0] = r.cost;
+    if (raises == 0) {
+      EXPECT_EQ(r.status, LearnerStatus::kLineSearchFailed);
+    } else {
+      EXPECT_EQ(r.status, LearnerStatus::kConverged);
+      EXPECT_LE(RelativeError(r.cost, sp->reference_cost), 1e-3);
+      EXPECT_LE((r.T - sp->reference_T).cwiseAbs().maxCoeff(), 1e-3);
+    }
+  }
+  EXPECT_GT(cost[0], 10 * cost[1]);
 }
 
 // The default pass's stored step is what the plant's QP (33) can apply: inside the input box

@@ -221,6 +221,7 @@ TEST_F(TrialDriverTest, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw)
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.learner.c = 1e12;
   settings.learner.alpha_min = 0.6;
+  settings.learner.failure_raises = 0;
   TrialDriver driver(p.problem, settings, fallback);
   const std::vector<TrialOutcome> o = driver.Run(plant, lq.x0, 4);
   EXPECT_TRUE(o[0].ran_fallback);

@@ -362,6 +362,7 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   // OC-FB law, not a replay of the measured nominal's inputs.
   ControllerConfig config;
   config.driver.learner.restart_on_failure = false;
+  config.driver.learner.failure_raises = 0;
   config.driver.learner.c = 1e12;
   // gamma 0.5: one rejection
   config.driver.learner.alpha_min = 0.6 * config.driver.learner.alpha_initial;
