@@ -574,6 +574,61 @@ TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
   EXPECT_EQ(reached, 12) << "of 12 starts converged to the reference";
 }
 
+TEST(StandardProblemEngine, AFreeFinalTimeReachesTheReference) {
+  // state_size_lq with its final time free in [1, 3.5] s (duration bounds widened to match): the
+  // engine moves the last instant T_1 with the switch T_0. The reference, without the engine:
+  // for each final time t_f the optimal cost over T_0 (LqReference, closed-form Riccati), and
+  // golden section over t_f. On [1, 3.5] that cost has one minimum, inside (t_f = 2.64 s; it
+  // rises to t_f = 4.2 s and falls again to a second minimum on a bound at 5 s, 2 % higher).
+  const LinearQuadraticData d = StateSizeData();
+  const double lo = 1.0, hi = 3.5;
+  auto best_over_switch = [&d](double tf, Vector* T) {
+    LinearQuadraticData e = d;
+    e.final_time = tf;
+    const ReferenceOptimum r = LqReference(e, (Vector(2) << 0.45 * tf, tf).finished(), 0.01);
+    if (T != nullptr) *T = r.T;
+    return r.cost;
+  };
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double a = lo, b = hi;
+  double c = b - g * (b - a), e = a + g * (b - a);
+  double fc = best_over_switch(c, nullptr), fe = best_over_switch(e, nullptr);
+  while (b - a > 1e-7) {
+    if (fc < fe) {
+      b = e; e = c; fe = fc; c = b - g * (b - a); fc = best_over_switch(c, nullptr);
+    } else {
+      a = c; c = e; fc = fe; e = a + g * (b - a); fe = best_over_switch(e, nullptr);
+    }
+  }
+  Vector T_star;
+  const double I_star = best_over_switch(0.5 * (a + b), &T_star);
+  ASSERT_GT(T_star(1), lo + 0.1);  // an interior optimum: the final time is decided by the cost
+  ASSERT_LT(T_star(1), hi - 0.1);
+  std::printf("reference: I* %.9f, T* (%.6f, %.6f) s\n", I_star, T_star(0), T_star(1));
+
+  std::mt19937 rng(3);
+  for (int start = -1; start < 4; ++start) {
+    const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("state_size_lq");
+    sp->problem.bounds.final_time_min = lo;
+    sp->problem.bounds.final_time_max = hi;
+    sp->problem.bounds.duration_max = Vector::Constant(2, hi);
+    sp->problem.Validate();
+    FunctionPolicy initial =
+        start < 0 ? sp->InitialPolicy() : RandomStartPolicy(*sp, DrawRandomStart(*sp, &rng));
+    LearnerSettings settings;
+    settings.max_trials = sp->trial_budget();
+    ModelPlant plant(sp->problem);
+    Learner learner(sp->problem, settings);
+    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    std::printf("start %2d: %s, trials %d, cost rel err %.1e, T (%.6f, %.6f) s\n", start,
+                LearnerStatusName(r.status), r.trials, RelativeError(r.cost, I_star), r.T(0),
+                r.T(1));
+    EXPECT_EQ(r.status, LearnerStatus::kConverged) << "start " << start;
+    EXPECT_LE(RelativeError(r.cost, I_star), 1e-5) << "start " << start;
+    EXPECT_LE((r.T - T_star).cwiseAbs().maxCoeff(), 1e-3) << "start " << start;
+  }
+}
+
 TEST(StandardProblemEngine, AFailedLineSearchOnABangBangNominalRaisesTheRegularization) {
   // One start of suite_starts (seed 7, --starts 30, the 15th of exp0_bounded's; its draw
   // rounded to 6 digits). Its line search ends at a nominal 29 times above I* where almost
