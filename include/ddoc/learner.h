@@ -78,11 +78,8 @@ struct LearnerSettings {
   /// definite, non-finite), shrinks 10x after each accepted trial, never below the floor.
   /// Default 0 (the converged gain is the exact one).
   double regularization_min = 0.0;
-  /// A line search that ends (alpha < alpha_min) where it would terminate (no
-  /// restart_on_failure, or a batch Solve) first raises mu to max(10 mu, L_uu scale) and
-  /// searches again from alpha_initial around the same nominal, up to this many times in a
-  /// row (reset by an accepted trial): docs/engine.md, "A failed line search". Default 2,
-  /// Paper() 0.
+  /// Times in a row a line search that would terminate first raises mu to max(10 mu, L_uu
+  /// scale) and searches again (docs/engine.md, "A failed line search"). Default 2, Paper() 0.
   int failure_raises = 2;
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
