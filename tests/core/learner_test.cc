@@ -172,15 +172,25 @@ LearnerSettings RejectEveryTrial() {
   return s;
 }
 
-TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
+// The two-mode LQ problem, its exact model as the plant, and u^0 = 0 run once (`measured`).
+struct LqRig {
   TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy initial = ZeroInputPolicy();
-  LearnerSettings settings = RejectEveryTrial();
-  Learner learner(p.problem, settings);
+  LqProblem p{lq};
+  ModelPlant plant{p.problem};
   Trajectory measured;
-  plant.Run(lq.x0, initial, &measured);
+  LqRig() {
+    FunctionPolicy initial = ZeroInputPolicy();
+    plant.Run(lq.x0, initial, &measured);
+  }
+};
+
+TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
+  LqRig rig;
+  TwoModeLq& lq = rig.lq;
+  LqProblem& p = rig.p;
+  ModelPlant& plant = rig.plant;
+  Trajectory& measured = rig.measured;
+  Learner learner(p.problem, RejectEveryTrial());
   EXPECT_THROW(learner.NextTrial(), InvalidArgument);  // not initialized
   learner.Initialize(measured);
   const double cost0 = learner.nominal_cost();
@@ -219,15 +229,11 @@ TEST(Learner, AFailedLineSearchRaisesMuAndSearchesAgainBeforeItTerminates) {
   // failure_raises = 2: after the first and the second failed search mu becomes
   // max(10 mu, L_uu scale), the pass is re-run with it and alpha returns to alpha_initial;
   // the third failed search terminates. The nominal never changes.
-  TwoModeLq lq;
-  LqProblem p(lq);
-  ModelPlant plant(p.problem);
-  FunctionPolicy initial = ZeroInputPolicy();
+  LqRig rig;
   LearnerSettings settings = RejectEveryTrial();
   settings.failure_raises = 2;
-  Learner learner(p.problem, settings);
-  Trajectory measured;
-  plant.Run(lq.x0, initial, &measured);
+  Learner learner(rig.p.problem, settings);
+  Trajectory& measured = rig.measured;
   learner.Initialize(measured);
   const double cost0 = learner.nominal_cost();
   const double luu = learner.backward_pass().luu_scale();
@@ -240,7 +246,7 @@ TEST(Learner, AFailedLineSearchRaisesMuAndSearchesAgainBeforeItTerminates) {
       ASSERT_EQ(learner.status(), LearnerStatus::kRunning) << "search " << search << ", trial " << i;
       OnlineController& policy = learner.NextTrial();
       EXPECT_DOUBLE_EQ(policy.alpha(), std::pow(0.5, i));
-      plant.Run(lq.x0, policy, &measured);
+      rig.plant.Run(rig.lq.x0, policy, &measured);
       EXPECT_FALSE(learner.CompleteTrial(measured).accepted);
       EXPECT_EQ(learner.nominal_cost(), cost0);
     }

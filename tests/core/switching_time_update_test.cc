@@ -86,22 +86,36 @@ Vector BruteForce(const Matrix& H, const Vector& g, const Vector& lo, const Vect
   return best;
 }
 
+// A random duration QP of size n: H = M M^T + shift I (M standard normal), g ~ 2 N(0, 1), and a
+// box lo ~ -(margin + |N|), hi ~ margin + |N| around 0.
+struct RandomDurationQp {
+  Matrix H;
+  Vector g, lo, hi;
+  RandomDurationQp(int n, double shift, double margin, std::mt19937* rng) : g(n), lo(n), hi(n) {
+    std::normal_distribution<double> normal;
+    Matrix M(n, n);
+    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(*rng);
+    H = M * M.transpose() + shift * Matrix::Identity(n, n);
+    for (int i = 0; i < n; ++i) {
+      g(i) = 2.0 * normal(*rng);
+      lo(i) = -margin - std::abs(normal(*rng));
+      hi(i) = margin + std::abs(normal(*rng));
+    }
+  }
+};
+
 TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
   std::mt19937 rng(21);
   std::normal_distribution<double> normal;
   int sum_active = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const int n = 1 + trial % 5;
-    Matrix M(n, n);
-    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(rng);
-    const Matrix H = M * M.transpose() + 0.2 * Matrix::Identity(n, n);
-    Vector g(n), lo(n), hi(n);
-    for (int i = 0; i < n; ++i) {
-      g(i) = 2.0 * normal(rng);
-      lo(i) = -0.2 - std::abs(normal(rng));
-      hi(i) = 0.2 + std::abs(normal(rng));
-      if (trial % 7 == 0) hi(i) = kInf;  // one-sided boxes too
-    }
+    RandomDurationQp qp(n, 0.2, 0.2, &rng);
+    const Matrix& H = qp.H;
+    const Vector& g = qp.g;
+    const Vector& lo = qp.lo;
+    Vector& hi = qp.hi;
+    if (trial % 7 == 0) hi.setConstant(kInf);  // one-sided boxes too
     // A sum box that is sometimes an equality (a fixed final time: here 1^T dD = 0).
     double s_lo = -0.3 * std::abs(normal(rng)), s_hi = 0.3 * std::abs(normal(rng));
     if (trial % 3 == 0) s_lo = s_hi = 0.0;
@@ -126,18 +140,13 @@ TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
 // sum constraint for |H| ~ 1e7 (its KKT border of ones fell below the LU's rank threshold).
 TEST(DurationQp, TheAnswerDoesNotDependOnTheScaleOfTheObjective) {
   std::mt19937 rng(5);
-  std::normal_distribution<double> normal;
   for (int trial = 0; trial < 60; ++trial) {
     const int n = 2 + trial % 4;
-    Matrix M(n, n);
-    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(rng);
-    const Matrix H = M * M.transpose() + 0.05 * Matrix::Identity(n, n);
-    Vector g(n), lo(n), hi(n);
-    for (int i = 0; i < n; ++i) {
-      g(i) = 2.0 * normal(rng);
-      lo(i) = -0.5 - std::abs(normal(rng));
-      hi(i) = 0.5 + std::abs(normal(rng));
-    }
+    const RandomDurationQp qp(n, 0.05, 0.5, &rng);
+    const Matrix& H = qp.H;
+    const Vector& g = qp.g;
+    const Vector& lo = qp.lo;
+    const Vector& hi = qp.hi;
     const Vector ref = BruteForce(H, g, lo, hi, 0.0, 0.0);
     ASSERT_EQ(ref.size(), n) << "trial " << trial;
     for (const double c : {1e-6, 1e3, 1e8}) {
