@@ -62,7 +62,7 @@ struct LearnerSettings {
   AlphaAfterAccept alpha_after_accept = AlphaAfterAccept::kRatio;
   double alpha_min = 1e-6;      ///< line search fails (terminated) when alpha drops below
   /// Convergence (default preset): the full step's predicted gain (the Newton decrement,
-  /// -dI_pred(1)) at most convergence_tolerance (1 + |I|). Default 1e-9.
+  /// -dI_pred(1)) at most convergence_tolerance (|I| + 1e-6 |I^0|). Default 1e-9.
   double convergence_tolerance = 1e-9;
   /// Algorithm 1's convergence test instead (the paper preset): int |du|^2 dtau + |dT|^2 <=
   /// epsilon for the last delta_i accepted iterations. Default off.
@@ -352,6 +352,7 @@ class Learner {
   double mu_ = 0;                     // Levenberg-Marquardt regularization of (30), (33)
   double luu_scale_ = 0;              // max |diag L_uu| seen, for the first raise of mu
   Optimality optimality_, initial_optimality_;
+  double initial_cost_ = 0;           // I^0, the cost of the nominal Initialize was given
   const OnlineController* initial_law_ = nullptr;  // SetInitialLaw
 };
 

@@ -105,6 +105,11 @@ BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
   const double gscale = 1.0 + g.cwiseAbs().maxCoeff();
   double hscale = 0;
   for (int i = 0; i < n; ++i) hscale = std::max(hscale, std::abs(H(i, i)));
+  // The same residual with the gradient divided by the curvature scale h = max H_ii is in units
+  // of x, so (cH, cg) stops where (H, g) does; both must hold (the plain one alone accepted a
+  // warm start 1e-3 off for |g| ~ 1e-9 or 1e9).
+  const double inv_h = hscale > 0 && std::isfinite(hscale) ? 1.0 / hscale : 1.0;
+  const double scaled_gscale = 1.0 + inv_h * g.cwiseAbs().maxCoeff();
 
   Vector& grad = grad_;
   BoxQPStatus status = BoxQPStatus::kMaxIterations;
@@ -116,14 +121,16 @@ BoxQPStatus BoxQP::Solve(const ConstMatrixRef& H, const ConstVectorRef& g,
       for (int j = 0; j < n; ++j) s += H(i, j) * x(j);
       grad(i) = s;
     }
-    // Projected-gradient (KKT) residual w = ||x - clamp(x - grad)||_inf.
-    double w = 0;
+    // Projected-gradient (KKT) residuals w = ||x - clamp(x - grad)||_inf and w_h with grad / h.
+    double w = 0, w_h = 0;
     for (int i = 0; i < n; ++i) {
       const double proj = std::min(std::max(x(i) - grad(i), lo(i)), hi(i));
       w = std::max(w, std::abs(x(i) - proj));
+      const double proj_h = std::min(std::max(x(i) - inv_h * grad(i), lo(i)), hi(i));
+      w_h = std::max(w_h, std::abs(x(i) - proj_h));
     }
     kkt_ = w;
-    if (w <= settings_.tolerance * gscale) {
+    if (w <= settings_.tolerance * gscale && w_h <= settings_.tolerance * scaled_gscale) {
       status = BoxQPStatus::kConverged;
       break;
     }

@@ -285,7 +285,10 @@ void Learner::UpdateConvergence() {
         *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
     const double gain = -(pass_.predicted_linear() + 0.5 * pass_.predicted_quadratic() +
                           full.model_change);
-    converged = gain <= settings_.convergence_tolerance * (1.0 + std::abs(nominal_cost_));
+    // Relative to the cost, so that a problem with its cost scaled by c converges where the
+    // unscaled one does; the initial cost's 1e-6 lets a problem whose optimum is 0 converge.
+    const double scale = std::abs(nominal_cost_) + 1e-6 * std::abs(initial_cost_);
+    converged = gain <= settings_.convergence_tolerance * scale;
   }
   status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
 }
@@ -319,6 +322,7 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   trial_pending_ = false;
   step_history_.clear();
   initial_optimality_ = optimality_;
+  initial_cost_ = nominal_cost_;
   status_ = LearnerStatus::kRunning;
   // A nominal that is already optimal (zero gradient) has converged; with the step test it
   // still needs delta_i accepted iterations.

@@ -143,7 +143,7 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   Eigen::SelfAdjointEigenSolver<Matrix> eig(H);
   const Vector& lambda = eig.eigenvalues();
   const double lmax = lambda.cwiseAbs().maxCoeff();
-  const double floor = settings.relative_regularization * std::max(1.0, lmax);
+  const double floor = settings.relative_regularization * (lmax > 0 ? lmax : 1.0);
   SwitchingTimeStep out;
   Vector modified = lambda;
   for (int i = 0; i < K; ++i) {

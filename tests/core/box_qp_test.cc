@@ -147,6 +147,29 @@ TEST(BoxQP, UnconstrainedOptimumIsTheNewtonStep) {
   EXPECT_LT((x - exact).norm(), 1e-12);
 }
 
+// The minimizer of (cH, cg) is that of (H, g) for every c > 0, from a warm start near it (the
+// previous sample's step, as the pass and (33) warm-start). The plain residual
+// ||x - clamp(x - grad)|| <= 1e-12 (1 + ||g||) accepted a warm start 1e-3 off for c = 1e-9 (the
+// gradient is tiny) and for c = 1e9 (the threshold is huge).
+TEST(BoxQP, TheAnswerDoesNotDependOnTheScaleOfTheObjective) {
+  std::mt19937 rng(17);
+  std::normal_distribution<double> normal;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int n = 1 + trial % 5;
+    const Case c = RandomCase(&rng, n, trial % 3 == 0 ? 100.0 : 0.5);
+    const Vector ref = testing::BruteForceBoxQp(c.H, c.g, c.lo, c.hi);
+    Vector warm = ref;
+    for (int i = 0; i < n; ++i) warm(i) += 1e-3 * normal(rng);
+    for (const double scale : {1e-9, 1e-3, 1.0, 1e3, 1e9}) {
+      BoxQP qp(n);
+      Vector x = warm;
+      EXPECT_EQ(qp.Solve(scale * c.H, scale * c.g, c.lo, c.hi, x), BoxQPStatus::kConverged)
+          << "trial " << trial << ", scale " << scale;
+      EXPECT_LT((x - ref).cwiseAbs().maxCoeff(), 1e-8) << "trial " << trial << ", scale " << scale;
+    }
+  }
+}
+
 TEST(BoxQP, WarmStartFromAnyPointAndFixedVariables) {
   std::mt19937 rng(5);
   const Case c = RandomCase(&rng, 5, 0.3);

@@ -232,6 +232,26 @@ TEST(SwitchingTimeUpdate, ANominalOnItsBoundUpToRoundingIsOnIt) {
   EXPECT_GT(D1, 0.5 + 1e-3);
 }
 
+// P22 and p2 scaled by c give the same step for every c > 0. Here H = S^T P22 S has one
+// negative eigenvalue that the floor mirrors. The floor was relative_regularization
+// max(1, lmax): for lmax < 1 it did not shrink with the cost, and at c = 1e-9 it took over H and
+// shrank the step (this test failed there).
+TEST(SwitchingTimeUpdate, TheStepDoesNotDependOnTheScaleOfTheCost) {
+  TwoModes t;  // durations in [0.1, 1], final time free
+  const Eigen::Vector2d T(0.5, 1.2), p2(0.03, -0.05);
+  Matrix P22(2, 2);
+  P22 << 0.4, -0.1, -0.1, -0.02;
+  const SwitchingTimeStep ref = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 0.5);
+  ASSERT_GT(ref.regularization, 0.0);  // the floor is active
+  ASSERT_GT(ref.dT.norm(), 1e-3);
+  for (const double c : {1e-9, 1e-4, 1e-2, 1e3, 1e9}) {
+    const SwitchingTimeStep step = SolveSwitchingTimeUpdate(t.problem, T, c * P22, c * p2, 0.5);
+    EXPECT_LT((step.dT - ref.dT).cwiseAbs().maxCoeff(), 1e-9 * (1 + ref.dT.norm())) << "c " << c;
+    EXPECT_NEAR(step.model_change, c * ref.model_change, 1e-9 * c * std::abs(ref.model_change))
+        << "c " << c;
+  }
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc
