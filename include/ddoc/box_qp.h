@@ -13,7 +13,9 @@ namespace ddoc {
 /// Settings of BoxQP.
 struct BoxQPSettings {
   int max_iterations = 50;         ///< Newton iterations (each: one Cholesky of the free block)
-  double tolerance = 1e-12;        ///< stop when ||x - clamp(x - s grad)||_inf <= tolerance * (1 + ||s g||_inf) for s = 1 and s = 1 / max H_ii
+  /// Stop when ||x - clamp(x - s grad)||_inf <= tolerance (1 + ||s g||_inf) for s = 1 and for
+  /// s = 1 / max H_ii. Default 1e-12.
+  double tolerance = 1e-12;
   double armijo = 1e-4;            ///< sufficient decrease factor of the projected line search
   double backtrack = 0.5;          ///< step shrink factor of the projected line search
   int max_line_search_steps = 40;  ///< line search steps before giving up

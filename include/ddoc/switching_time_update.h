@@ -14,7 +14,8 @@ namespace ddoc {
 /// Settings of the switching-time update.
 struct SwitchingTimeSettings {
   /// Levenberg-Marquardt-type floor on the spectrum of the reduced Hessian H = S^T P22 S:
-  /// eigenvalues below floor = relative_regularization * max|lambda(H)| become max(|lambda|, floor).
+  /// eigenvalues below floor = relative_regularization * max|lambda(H)| become
+  /// max(|lambda|, floor).
   double relative_regularization = 1e-3;
   /// Additional cap |dD_k| <= max_duration_step on each duration change (s); default none.
   double max_duration_step = std::numeric_limits<double>::infinity();
@@ -51,8 +52,8 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
 /// singular: the Lyapunov P22 has no curvature in D_0 when l does not depend on time). Regularized
 /// Newton step (Levenberg-Marquardt type, eigenvalue modification): with H = V diag(lambda) V^T
 /// and floor = relative_regularization * max|lambda| (1 when H = 0), every lambda_i < floor is
-/// replaced by max(|lambda_i|, floor). Positive definite H are used unchanged (exact Newton step in the
-/// box); negative curvature is mirrored, so the step stays a descent direction whose length
+/// replaced by max(|lambda_i|, floor). Positive definite H are used unchanged (exact Newton step
+/// in the box); negative curvature is mirrored, so the step stays a descent direction whose length
 /// scales with alpha (a plain shift H + mu I would make the step huge along the shifted
 /// directions).
 ///

@@ -243,7 +243,8 @@ TEST(Learner, AFailedLineSearchRaisesMuAndSearchesAgainBeforeItTerminates) {
   ASSERT_LT(predicted, 0.0);
   for (int search = 0; search < 3; ++search) {
     for (int i = 0; i < 4; ++i) {
-      ASSERT_EQ(learner.status(), LearnerStatus::kRunning) << "search " << search << ", trial " << i;
+      ASSERT_EQ(learner.status(), LearnerStatus::kRunning)
+          << "search " << search << ", trial " << i;
       OnlineController& policy = learner.NextTrial();
       EXPECT_DOUBLE_EQ(policy.alpha(), std::pow(0.5, i));
       rig.plant.Run(rig.lq.x0, policy, &measured);
