@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "ddoc/linear_system.h"
+#include "ddoc/plant.h"
 #include "ddoc/quadratic_cost.h"
 
 namespace ddoc {
@@ -106,16 +107,6 @@ void SetBounds(StandardProblem* sp, const Vector& u_min, const Vector& u_max, do
 }
 
 void ZeroInput(int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); }
-
-std::unique_ptr<StandardProblem> FromLq(const LinearQuadraticData& d) {
-  auto sp = std::make_unique<StandardProblem>();
-  sp->system = std::make_unique<LinearSystem>(d.A, d.B, d.E);
-  sp->cost = std::make_unique<QuadraticTrackingCost>(d.Q, d.r, d.R, d.rho, d.S, d.s);
-  SetBounds(sp.get(), d.u_min, d.u_max, d.final_time);
-  sp->x0 = d.x0;
-  sp->initial_input = ZeroInput;
-  return sp;
-}
 
 Vector Values(std::initializer_list<double> v) {
   Vector out(static_cast<int>(v.size()));
@@ -268,16 +259,33 @@ FunctionPolicy RandomStartPolicy(const StandardProblem& sp, const RandomStart& s
                         });
 }
 
+std::unique_ptr<StandardProblem> StandardProblemFromLq(const LinearQuadraticData& d) {
+  auto sp = std::make_unique<StandardProblem>();
+  sp->system = std::make_unique<LinearSystem>(d.A, d.B, d.E);
+  sp->cost = std::make_unique<QuadraticTrackingCost>(d.Q, d.r, d.R, d.rho, d.S, d.s);
+  SetBounds(sp.get(), d.u_min, d.u_max, d.final_time);
+  sp->x0 = d.x0;
+  sp->initial_input = ZeroInput;
+  return sp;
+}
+
+SolveResult SolveOnModel(const StandardProblem& sp, Policy& initial,
+                         const LearnerSettings& settings) {
+  ModelPlant plant(sp.problem);
+  Learner learner(sp.problem, settings);
+  return learner.Solve(plant, plant, sp.x0, initial);
+}
+
 std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
   std::unique_ptr<StandardProblem> sp;
   if (name == "lqr") {
-    sp = FromLq(LqrData());
+    sp = StandardProblemFromLq(LqrData());
     sp->citation = "finite-horizon LQR of a double integrator (one mode, T = 4 s)";
     sp->initial_durations = Values({4});
     sp->reference_cost = 0.86264301298;
     sp->reference_T = Values({4});
   } else if (name == "sto2_linear") {
-    sp = FromLq(StoLinearData(2));
+    sp = StandardProblemFromLq(StoLinearData(2));
     sp->citation =
         "Stellato et al., IEEE TAC 2017 / SwitchTimeOpt.jl test/linsys.jl: two linear modes, "
         "no input";
@@ -285,7 +293,7 @@ std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
     sp->reference_cost = 5.25454294492;
     sp->reference_T = Values({0.264866099041, 1});
   } else if (name == "sto9_linear") {
-    sp = FromLq(StoLinearData(9));
+    sp = StandardProblemFromLq(StoLinearData(9));
     sp->citation =
         "SwitchTimeOpt.jl examples/linear.jl dynamics with 8 switches: nine alternating linear "
         "modes, no input";
@@ -313,7 +321,7 @@ std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
     sp->reference_T = Values({2.61213321936, 4.34088778443, 12});
   } else if (name == "exp0" || name == "exp0_bounded") {
     const bool bounded = name == "exp0_bounded";
-    sp = FromLq(Exp0Data(bounded ? kExp0InputBound : kInf));
+    sp = StandardProblemFromLq(Exp0Data(bounded ? kExp0InputBound : kInf));
     sp->citation = "Xu & Antsaklis, IEEE TAC 2004, example 1 (OCS2 EXP0)";
     if (bounded) sp->citation += " with |u| <= 8 (active at the optimum)";
     sp->bounds_active = bounded;
@@ -338,7 +346,7 @@ std::unique_ptr<StandardProblem> MakeStandardProblem(const std::string& name) {
     sp->reference_cost = 5.44097350240;
     sp->reference_T = Values({0.224518463358, 1.02002462586, 3});
   } else if (name == "state_size_lq") {
-    sp = FromLq(StateSizeData());
+    sp = StandardProblemFromLq(StateSizeData());
     sp->citation =
         "constructed for this suite: LQ, 2 states then 3 (rectangular reset [I; 0])";
     sp->initial_durations = Values({1.5, 1.5});

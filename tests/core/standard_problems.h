@@ -80,6 +80,15 @@ RandomStart DrawRandomStart(const StandardProblem& sp, std::mt19937* rng);
 /// The policy of a RandomStart: sp's u^0 plus the offset, on the start's durations.
 FunctionPolicy RandomStartPolicy(const StandardProblem& sp, const RandomStart& start);
 
+/// A problem from linear-quadratic data, posed as the suite's are: durations in
+/// [10 ms, final time] (one mode: the final time), the final time fixed, no surfaces, x0 and
+/// u^0 = 0 from d; initial_durations, reference_cost and reference_T are left for the caller.
+std::unique_ptr<StandardProblem> StandardProblemFromLq(const LinearQuadraticData& d);
+
+/// Algorithm 1 with `settings` on sp.problem, its exact model as the plant, from sp.x0.
+SolveResult SolveOnModel(const StandardProblem& sp, Policy& initial,
+                         const LearnerSettings& settings);
+
 // The numbers of each problem (shared with the reference solvers).
 
 /// lqr: xdot = [0 1; 0 0] x + [0; 1] u, l = 1/2 (|x|^2 + u^2), no terminal cost, x0 = (1, 0),

@@ -561,9 +561,7 @@ TEST(StandardProblemEngine, BoundedProblemFromOtherStarts) {
     FunctionPolicy initial = RandomStartPolicy(*sp, DrawRandomStart(*sp, &rng));
     LearnerSettings settings;
     settings.max_trials = sp->trial_budget();
-    ModelPlant plant(sp->problem);
-    Learner learner(sp->problem, settings);
-    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    const SolveResult r = SolveOnModel(*sp, initial, settings);
     const double cost_error = RelativeError(r.cost, sp->reference_cost);
     const double T_error = (r.T - sp->reference_T).cwiseAbs().maxCoeff();
     const bool ok = r.status == LearnerStatus::kConverged && cost_error <= 1e-3 && T_error <= 1e-3;
@@ -621,9 +619,7 @@ TEST(StandardProblemEngine, TheCostScaleDoesNotChangeTheAnswer) {
       FunctionPolicy initial = sp->InitialPolicy();
       LearnerSettings settings;
       settings.max_trials = sp->trial_budget();
-      ModelPlant plant(sp->problem);
-      Learner learner(sp->problem, settings);
-      const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+      const SolveResult r = SolveOnModel(*sp, initial, settings);
       std::printf("%s x %g: %s, trials %d, cost / c rel err %.1e\n", name.c_str(), c,
                   LearnerStatusName(r.status), r.trials,
                   RelativeError(r.cost / c, sp->reference_cost));
@@ -677,9 +673,7 @@ TEST(StandardProblemEngine, AFreeFinalTimeReachesTheReference) {
         start < 0 ? sp->InitialPolicy() : RandomStartPolicy(*sp, DrawRandomStart(*sp, &rng));
     LearnerSettings settings;
     settings.max_trials = sp->trial_budget();
-    ModelPlant plant(sp->problem);
-    Learner learner(sp->problem, settings);
-    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    const SolveResult r = SolveOnModel(*sp, initial, settings);
     std::printf("start %2d: %s, trials %d, cost rel err %.1e, T (%.6f, %.6f) s\n", start,
                 LearnerStatusName(r.status), r.trials, RelativeError(r.cost, I_star), r.T(0),
                 r.T(1));
@@ -706,9 +700,7 @@ TEST(StandardProblemEngine, AFailedLineSearchOnABangBangNominalRaisesTheRegulari
     LearnerSettings settings;
     settings.failure_raises = raises;
     settings.max_trials = sp->trial_budget();
-    ModelPlant plant(sp->problem);
-    Learner learner(sp->problem, settings);
-    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    const SolveResult r = SolveOnModel(*sp, initial, settings);
     std::printf("failure_raises %d: %s, trials %d, cost %.6g x I*\n", raises,
                 LearnerStatusName(r.status), r.trials, r.cost / sp->reference_cost);
     cost[raises ? 1 : 0] = r.cost;

@@ -19,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "ddoc/ddoc.h"
+#include "standard_problems.h"
 #include "standard_references.h"
 
 namespace ddoc {
@@ -27,7 +28,7 @@ namespace {
 using testing::LinearQuadraticData;
 
 constexpr double kFinalTime = 2.0;
-constexpr double kMinDuration = 0.01;
+constexpr double kMinDuration = 0.01;  // the duration bound StandardProblemFromLq poses
 
 LinearQuadraticData RandomProblem(std::mt19937* rng) {
   std::normal_distribution<double> normal;
@@ -89,10 +90,8 @@ testing::ReferenceOptimum GlobalOptimum(const LinearQuadraticData& d) {
       T(1) = t1;
       consider();
     }
-    for (const double t1 : {t0 + kMinDuration}) {
-      T(1) = t1;
-      consider();
-    }
+    T(1) = t0 + kMinDuration;  // the middle mode on its bound
+    consider();
   }
   return testing::LqReference(d, best_T, kMinDuration);
 }
@@ -136,30 +135,21 @@ int Main(int argc, char** argv) {
     const LinearQuadraticData d = RandomProblem(&rng);
     const int K = d.num_modes();
     const testing::ReferenceOptimum ref = GlobalOptimum(d);
-    LinearSystem system(d.A, d.B, d.E);
-    QuadraticTrackingCost cost(d.Q, d.r, d.R, d.rho, d.S, d.s);
-    Problem problem;
-    problem.system = &system;
-    problem.cost = &cost;
-    problem.bounds.u_min = d.u_min;
-    problem.bounds.u_max = d.u_max;
-    problem.bounds.duration_min = Vector::Constant(K, kMinDuration);
-    problem.bounds.duration_max = Vector::Constant(K, kFinalTime);
-    problem.bounds.FixFinalTime(kFinalTime);
-    problem.surface_weights = Vector::Zero(K);
-    FunctionPolicy initial(Vector::Constant(K, kFinalTime / K),
-                           [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });
-    ModelPlant plant(problem);
+    // The suite's posing: durations in [10 ms, 2 s], the final time fixed, u^0 = 0.
+    const std::unique_ptr<testing::StandardProblem> sp = testing::StandardProblemFromLq(d);
+    sp->problem.Validate();
+    sp->initial_durations = Vector::Constant(K, kFinalTime / K);
+    FunctionPolicy initial = sp->InitialPolicy();
     LearnerSettings settings;
     settings.max_trials = max_trials;
-    Learner learner(problem, settings);
-    const SolveResult r = learner.Solve(plant, plant, d.x0, initial);
+    const SolveResult r = testing::SolveOnModel(*sp, initial, settings);
     const bool ok = r.status == LearnerStatus::kConverged;
     const bool at_global = ok && std::abs(r.cost - ref.cost) <= 1e-3 * std::abs(ref.cost) &&
                            (r.T - ref.T).cwiseAbs().maxCoeff() <= 1e-3;
     // First order at the engine's instants, relative to the gradient's size at the start.
     const double scale = 1.0 + KktViolation(d, Vector::LinSpaced(K, kFinalTime / K, kFinalTime));
-    const bool kkt = KktViolation(d, r.T) <= 1e-3 * scale;
+    const double violation = KktViolation(d, r.T);
+    const bool kkt = violation <= 1e-3 * scale;
     converged += ok;
     global += at_global;
     stationary += ok && kkt;
@@ -170,7 +160,7 @@ int Main(int argc, char** argv) {
                    p, K, d.state_dim(0), d.input_dim(), LearnerStatusName(r.status), r.trials,
                    r.cost / ref.cost);
       for (int k = 0; k < K; ++k) std::fprintf(stderr, "%s%.3f", k ? ", " : "", r.T(k));
-      std::fprintf(stderr, ") s, first-order violation %.1e\n", KktViolation(d, r.T));
+      std::fprintf(stderr, ") s, first-order violation %.1e\n", violation);
     }
   }
   std::printf("| problems | converged | first-order point | at the global optimum | the others: "

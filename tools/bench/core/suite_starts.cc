@@ -39,9 +39,7 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
     const std::unique_ptr<StandardProblem> sp = MakeStandardProblem(name);
     const testing::RandomStart start = DrawRandomStart(*sp, rng);
     FunctionPolicy initial = RandomStartPolicy(*sp, start);
-    ModelPlant plant(sp->problem);
-    Learner learner(sp->problem, settings);
-    const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+    const SolveResult r = testing::SolveOnModel(*sp, initial, settings);
     ++t.runs;
     t.converged += r.status == LearnerStatus::kConverged;
     const double cost_error = std::abs(r.cost - sp->reference_cost) / sp->reference_cost;
