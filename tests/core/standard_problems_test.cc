@@ -645,19 +645,10 @@ TEST(StandardProblemEngine, AFreeFinalTimeReachesTheReference) {
     if (T != nullptr) *T = r.T;
     return r.cost;
   };
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double a = lo, b = hi;
-  double c = b - g * (b - a), e = a + g * (b - a);
-  double fc = best_over_switch(c, nullptr), fe = best_over_switch(e, nullptr);
-  while (b - a > 1e-7) {
-    if (fc < fe) {
-      b = e; e = c; fe = fc; c = b - g * (b - a); fc = best_over_switch(c, nullptr);
-    } else {
-      a = c; c = e; fc = fe; e = a + g * (b - a); fe = best_over_switch(e, nullptr);
-    }
-  }
+  const double tf_star = GoldenSectionMinimum(
+      [&best_over_switch](double tf) { return best_over_switch(tf, nullptr); }, lo, hi, 1e-7);
   Vector T_star;
-  const double I_star = best_over_switch(0.5 * (a + b), &T_star);
+  const double I_star = best_over_switch(tf_star, &T_star);
   ASSERT_GT(T_star(1), lo + 0.1);  // an interior optimum: the final time is decided by the cost
   ASSERT_LT(T_star(1), hi - 0.1);
   std::printf("reference: I* %.9f, T* (%.6f, %.6f) s\n", I_star, T_star(0), T_star(1));

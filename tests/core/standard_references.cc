@@ -495,33 +495,38 @@ ReferenceOptimum LqZeroOrderHoldReference(const LinearQuadraticData& d, double T
     return LqZeroOrderHoldOptimalCost(d, T, dt);
   };
   // Golden section (the ZOH cost is only piecewise smooth in T_0: its grid moves with it).
+  ReferenceOptimum out;
+  out.T.resize(2);
+  out.T << GoldenSectionMinimum(J, T0_lo, T0_hi, 1e-9, &out.newton_iterations), d.final_time;
+  out.cost = J(out.T(0));
+  return out;
+}
+
+double GoldenSectionMinimum(const std::function<double(double)>& f, double lo, double hi,
+                            double tolerance, int* iterations) {
   const double g = 0.5 * (std::sqrt(5.0) - 1);
-  double a = T0_lo, b = T0_hi;
+  double a = lo, b = hi;
   double c = b - g * (b - a), e = a + g * (b - a);
-  double fc = J(c), fe = J(e);
+  double fc = f(c), fe = f(e);
   int it = 0;
-  while (b - a > 1e-9 && it < 200) {
+  while (b - a > tolerance && it < 200) {
     ++it;
     if (fc < fe) {
       b = e;
       e = c;
       fe = fc;
       c = b - g * (b - a);
-      fc = J(c);
+      fc = f(c);
     } else {
       a = c;
       c = e;
       fc = fe;
       e = a + g * (b - a);
-      fe = J(e);
+      fe = f(e);
     }
   }
-  ReferenceOptimum out;
-  out.T.resize(2);
-  out.T << 0.5 * (a + b), d.final_time;
-  out.cost = J(out.T(0));
-  out.newton_iterations = it;
-  return out;
+  if (iterations != nullptr) *iterations = it;
+  return 0.5 * (a + b);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -76,6 +76,11 @@ ReferenceOptimum LqReference(const LinearQuadraticData& d, const Vector& T_guess
 /// Van Loan's exponentials). The gap to LqOptimalCost is what the hold costs at this dt.
 double LqZeroOrderHoldOptimalCost(const LinearQuadraticData& d, const Vector& T, double dt);
 
+/// The minimizer of a unimodal f on [lo, hi] by golden section, to an interval below `tolerance`
+/// (at most 200 steps; `iterations`, when given, receives their number).
+double GoldenSectionMinimum(const std::function<double(double)>& f, double lo, double hi,
+                            double tolerance, int* iterations = nullptr);
+
 /// Minimizes LqZeroOrderHoldOptimalCost over the free instants (golden section, K = 2 only).
 ReferenceOptimum LqZeroOrderHoldReference(const LinearQuadraticData& d, double T0_lo,
                                           double T0_hi, double dt);
