@@ -37,26 +37,10 @@ double KktResidual(const Matrix& H, const Vector& g, const Vector& lo, const Vec
   return worst;
 }
 
-struct Case {
-  Matrix H;
-  Vector g, lo, hi;
-};
+using Case = RandomBoxQp;
 
 Case RandomCase(std::mt19937* rng, int n, double box) {
-  std::normal_distribution<double> normal;
-  Case c;
-  Matrix M(n, n);
-  for (int i = 0; i < n * n; ++i) M.data()[i] = normal(*rng);
-  c.H = M * M.transpose() + 0.1 * Matrix::Identity(n, n);
-  c.g.resize(n);
-  c.lo.resize(n);
-  c.hi.resize(n);
-  for (int i = 0; i < n; ++i) {
-    c.g(i) = 3.0 * normal(*rng);
-    c.lo(i) = -box * (0.2 + std::abs(normal(*rng)));
-    c.hi(i) = box * (0.2 + std::abs(normal(*rng)));
-  }
-  return c;
+  return DrawRandomBoxQp(rng, n, 0.1, 3.0, box, 0.2);
 }
 
 TEST(BoxQP, MatchesBruteForceAndKkt) {

@@ -10,6 +10,7 @@
 
 #include "ddoc/switching_time_update.h"
 #include "test_systems.h"
+#include "test_util.h"
 
 namespace ddoc {
 namespace testing {
@@ -86,23 +87,10 @@ Vector BruteForce(const Matrix& H, const Vector& g, const Vector& lo, const Vect
   return best;
 }
 
-// A random duration QP of size n: H = M M^T + shift I (M standard normal), g ~ 2 N(0, 1), and a
-// box lo ~ -(margin + |N|), hi ~ margin + |N| around 0.
-struct RandomDurationQp {
-  Matrix H;
-  Vector g, lo, hi;
-  RandomDurationQp(int n, double shift, double margin, std::mt19937* rng) : g(n), lo(n), hi(n) {
-    std::normal_distribution<double> normal;
-    Matrix M(n, n);
-    for (int i = 0; i < n * n; ++i) M.data()[i] = normal(*rng);
-    H = M * M.transpose() + shift * Matrix::Identity(n, n);
-    for (int i = 0; i < n; ++i) {
-      g(i) = 2.0 * normal(*rng);
-      lo(i) = -margin - std::abs(normal(*rng));
-      hi(i) = margin + std::abs(normal(*rng));
-    }
-  }
-};
+// A random duration QP of size n: a box of -(margin + |N|) .. margin + |N| around 0.
+RandomBoxQp RandomDurationQp(int n, double shift, double margin, std::mt19937* rng) {
+  return DrawRandomBoxQp(rng, n, shift, 2.0, 1.0, margin);
+}
 
 TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
   std::mt19937 rng(21);
@@ -110,7 +98,7 @@ TEST(DurationQp, MatchesBruteForceWithTheSumConstraint) {
   int sum_active = 0;
   for (int trial = 0; trial < 300; ++trial) {
     const int n = 1 + trial % 5;
-    RandomDurationQp qp(n, 0.2, 0.2, &rng);
+    RandomBoxQp qp = RandomDurationQp(n, 0.2, 0.2, &rng);
     const Matrix& H = qp.H;
     const Vector& g = qp.g;
     const Vector& lo = qp.lo;
@@ -142,7 +130,7 @@ TEST(DurationQp, TheAnswerDoesNotDependOnTheScaleOfTheObjective) {
   std::mt19937 rng(5);
   for (int trial = 0; trial < 60; ++trial) {
     const int n = 2 + trial % 4;
-    const RandomDurationQp qp(n, 0.05, 0.5, &rng);
+    const RandomBoxQp qp = RandomDurationQp(n, 0.05, 0.5, &rng);
     const Matrix& H = qp.H;
     const Vector& g = qp.g;
     const Vector& lo = qp.lo;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,31 @@ inline Vector Scalar(double v) {
 /// 1/2 x'Hx + g'x.
 inline double QpObjective(const Matrix& H, const Vector& g, const Vector& x) {
   return 0.5 * x.dot(H * x) + g.dot(x);
+}
+
+/// A random box QP of size n: H = M M^T + shift I (M standard normal), g = g_scale N(0, 1) and
+/// lo = -box (offset + |N(0, 1)|), hi = box (offset + |N(0, 1)|), drawn M first, then g, lo, hi
+/// variable by variable.
+struct RandomBoxQp {
+  Matrix H;
+  Vector g, lo, hi;
+};
+inline RandomBoxQp DrawRandomBoxQp(std::mt19937* rng, int n, double shift, double g_scale,
+                                   double box, double offset) {
+  std::normal_distribution<double> normal;
+  RandomBoxQp c;
+  Matrix M(n, n);
+  for (int i = 0; i < n * n; ++i) M.data()[i] = normal(*rng);
+  c.H = M * M.transpose() + shift * Matrix::Identity(n, n);
+  c.g.resize(n);
+  c.lo.resize(n);
+  c.hi.resize(n);
+  for (int i = 0; i < n; ++i) {
+    c.g(i) = g_scale * normal(*rng);
+    c.lo(i) = -box * (offset + std::abs(normal(*rng)));
+    c.hi(i) = box * (offset + std::abs(normal(*rng)));
+  }
+  return c;
 }
 
 /// Box QP min 1/2 x'Hx + g'x, lo <= x <= hi, by brute force (an independent check of BoxQP):
