@@ -81,6 +81,12 @@ struct LearnerSettings {
   /// Times in a row a line search that would terminate first raises mu to max(10 mu, L_uu
   /// scale) and searches again (docs/engine.md, "A failed line search"). Default 2, Paper() 0.
   int failure_raises = 2;
+  /// alpha_after_accept = kRatio: an accepted trial at alpha_initial whose (31) mirrored negative
+  /// curvature and whose measured decrease exceeded 1.5x the predicted one halves the mirror's
+  /// scale (SwitchingTimeSettings::negative_curvature_scale, times switching's own) down to this
+  /// floor; rho < 0.75 doubles it, a rejected trial resets it to 1 (docs/engine.md, "Negative
+  /// curvature"). In (0, 1], 1 = a fixed mirror. Default 1/16.
+  double relax_mirror_min = 1.0 / 16;
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
   /// value of the pass, dx0 = trial x0 - nominal x0) plus the nominal's cost change under the
@@ -336,7 +342,8 @@ class Learner {
   int iteration_ = 0;
   int trials_ = 0;
   int restarts_ = 0;
-  int failure_raises_ = 0;          // failure_raises used since the last accepted trial
+  int failure_raises_ = 0;
+  double mirror_scale_ = 1;         // relax_mirror_min: the mirror's scale of the next (31)          // failure_raises used since the last accepted trial
   bool remeasure_pending_ = false;  // remeasure_nominal: the next trial re-runs the nominal's law
   bool remeasure_trial_ = false;    // the pending trial is such a re-measurement
   int nominal_samples_ = 0;         // re-measurements of the nominal in nominal_cost_

@@ -136,6 +136,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
                "noise_margin must be finite and >= 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.failure_raises >= 0, "failure_raises must be >= 0");
+  CheckSetting(settings.relax_mirror_min > 0 && settings.relax_mirror_min <= 1,
+               "relax_mirror_min must be in (0, 1]");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
   CheckSetting(settings.convergence_tolerance >= 0 && std::isfinite(settings.convergence_tolerance),
@@ -310,6 +312,7 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   }
   initialized_ = true;
   alpha_ = settings_.alpha_initial;
+  mirror_scale_ = 1;
   trials_ = 0;
   restarts_ = 0;
   failure_raises_ = 0;
@@ -346,8 +349,10 @@ OnlineController& Learner::NextTrial() {
     remeasure_trial_ = remeasure_pending_ && status_ != LearnerStatus::kLineSearchFailed;
     return NominalLaw();
   }
+  SwitchingTimeSettings switching = settings_.switching;
+  switching.negative_curvature_scale *= mirror_scale_;
   switching_step_ = SolveSwitchingTimeUpdate(*problem_, nominal_.T, pass_.P22_initial(),
-                                             pass_.p2_initial(), alpha_, settings_.switching);
+                                             pass_.p2_initial(), alpha_, switching);
   controllers_[active_].Load(nominal_, pass_, alpha_, switching_step_.dT);
   if (settings_.blend_feedback) {
     // The law that produced the nominal: the accepted trial's (another slot), else u^0.
@@ -486,6 +491,13 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
                        settings_.acceptance == Acceptance::kPredictedDecrease && r.predicted < 0;
     if (ratio) {
       const double rho = r.decrease / r.predicted;
+      // A mirrored negative curvature that the plant shows to be too steep a model: the measured
+      // decrease beat the prediction by half at the full step, so the next step may go further.
+      if (switching_step_.mirrored && rho > 1.5 && alpha_ >= settings_.alpha_initial) {
+        mirror_scale_ = std::max(settings_.relax_mirror_min, 0.5 * mirror_scale_);
+      } else if (rho < 0.75) {
+        mirror_scale_ = std::min(1.0, 2.0 * mirror_scale_);
+      }
       if (rho > 0.75) {
         alpha_ = std::min(settings_.alpha_initial, 2.0 * alpha_);
       } else if (rho < 0.25) {
@@ -501,6 +513,7 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     if (mu_ < 1e-6 * luu_scale_) mu_ = settings_.regularization_min;
     UpdateConvergence();
   } else {
+    mirror_scale_ = 1;
     double next = settings_.gamma * alpha_;
     if (settings_.interpolate_backtracking && std::isfinite(r.decrease)) {
       // The quadratic through phi(0) = 0, phi'(0) = slope and phi(alpha) = decrease.

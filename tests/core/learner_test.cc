@@ -507,6 +507,11 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   settings.restart_alpha = 2.0;
   EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
   settings.restart_alpha = 0.0;
+  for (const double bad : {0.0, 1.5}) {
+    settings.relax_mirror_min = bad;
+    EXPECT_THROW(Learner(p.problem, settings), InvalidArgument) << bad;
+  }
+  settings.relax_mirror_min = 1.0 / 16;
   Learner batch(p.problem, settings);
   FunctionPolicy again = ZeroInputPolicy();
   const SolveResult solved = batch.Solve(plant, plant, lq.x0, again);
