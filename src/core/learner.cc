@@ -138,6 +138,12 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   CheckSetting(settings.failure_raises >= 0, "failure_raises must be >= 0");
   CheckSetting(settings.relax_mirror_min > 0 && settings.relax_mirror_min <= 1,
                "relax_mirror_min must be in (0, 1]");
+  CheckSetting(settings.switching.negative_curvature_scale > 0 &&
+                   settings.switching.negative_curvature_scale <= 1,
+               "switching.negative_curvature_scale must be in (0, 1]");
+  CheckSetting(settings.switching.relative_regularization > 0 &&
+                   std::isfinite(settings.switching.relative_regularization),
+               "switching.relative_regularization must be finite and > 0");
   CheckSetting(settings.optimality_tolerance >= 0 && std::isfinite(settings.optimality_tolerance),
                "optimality_tolerance must be finite and >= 0");
   CheckSetting(settings.convergence_tolerance >= 0 && std::isfinite(settings.convergence_tolerance),

@@ -512,6 +512,12 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
     EXPECT_THROW(Learner(p.problem, settings), InvalidArgument) << bad;
   }
   settings.relax_mirror_min = 1.0 / 16;
+  settings.switching.negative_curvature_scale = 0.0;
+  EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
+  settings.switching.negative_curvature_scale = 1.0;
+  settings.switching.relative_regularization = 0.0;
+  EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
+  settings.switching.relative_regularization = 1e-3;
   Learner batch(p.problem, settings);
   FunctionPolicy again = ZeroInputPolicy();
   const SolveResult solved = batch.Solve(plant, plant, lq.x0, again);
