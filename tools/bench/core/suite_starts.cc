@@ -48,11 +48,12 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
     t.trials += r.trials;
     t.max_trials = std::max(t.max_trials, r.trials);
     if (verbose) {
+      // Six digits: enough to pose the start again in a test (RandomStart).
       std::fprintf(stderr, "%s start %d: D^0 (", name.c_str(), s);
       for (int k = 0; k < start.durations.size(); ++k) {
-        std::fprintf(stderr, "%s%.3f", k ? ", " : "", start.durations(k));
+        std::fprintf(stderr, "%s%.6f", k ? ", " : "", start.durations(k));
       }
-      std::fprintf(stderr, ") s, u^0 %+.3f: %s, %d trials, cost %.6g x I*, max |T - T*| %.2e s\n",
+      std::fprintf(stderr, ") s, u^0 %+.6f: %s, %d trials, cost %.6g x I*, max |T - T*| %.2e s\n",
                    start.offset, LearnerStatusName(r.status), r.trials, r.cost / sp->reference_cost,
                    T_error);
     }
