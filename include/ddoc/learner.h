@@ -81,11 +81,8 @@ struct LearnerSettings {
   /// Times in a row a line search that would terminate first raises mu to max(10 mu, L_uu
   /// scale) and searches again (docs/engine.md, "A failed line search"). Default 2, Paper() 0.
   int failure_raises = 2;
-  /// alpha_after_accept = kRatio: an accepted trial at alpha_initial whose (31) mirrored negative
-  /// curvature and whose measured decrease exceeded 1.5x the predicted one halves the mirror's
-  /// scale (SwitchingTimeSettings::negative_curvature_scale, times switching's own) down to this
-  /// floor; rho < 0.75 doubles it, a rejected trial resets it to 1 (docs/engine.md, "Negative
-  /// curvature"). In (0, 1], 1 = a fixed mirror. Default 1/16.
+  /// kRatio: floor of the mirror's scale in (31), halved when the plant beats the prediction by
+  /// half (docs/engine.md, "Negative curvature"). In (0, 1], 1 = a fixed mirror. Default 1/16.
   double relax_mirror_min = 1.0 / 16;
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the

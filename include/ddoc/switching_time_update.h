@@ -17,8 +17,7 @@ struct SwitchingTimeSettings {
   /// eigenvalues below floor = relative_regularization * max|lambda(H)| become
   /// max(|lambda|, floor).
   double relative_regularization = 1e-3;
-  /// A negative eigenvalue lambda becomes max(negative_curvature_scale * |lambda|, floor): the
-  /// mirror's curvature, in (0, 1]. Default 1 (the learner lowers it: relax_mirror_min).
+  /// s of the mirror: a negative eigenvalue becomes max(s |lambda|, floor). In (0, 1], default 1.
   double negative_curvature_scale = 1.0;
   /// Additional cap |dD_k| <= max_duration_step on each duration change (s); default none.
   double max_duration_step = std::numeric_limits<double>::infinity();
