@@ -34,10 +34,10 @@ static_assert(sizeof(HopperCostWeights) == 160, "HopperCostWeights changed: upda
 static_assert(sizeof(NominalGaitSettings) == 48, "NominalGaitSettings changed: update the key");
 static_assert(sizeof(HopperModeDurations) == 32, "HopperModeDurations changed: update the key");
 static_assert(sizeof(BackwardPassSettings) == 48, "BackwardPassSettings changed: update the key");
-static_assert(sizeof(SwitchingTimeSettings) == 24, "SwitchingTimeSettings changed: update the key");
+static_assert(sizeof(SwitchingTimeSettings) == 16, "SwitchingTimeSettings changed: update the key");
 static_assert(sizeof(BoxQPSettings) == 48, "BoxQPSettings changed: update InitialLawKey");
 static_assert(sizeof(OnlineControllerSettings) == 80, "OnlineControllerSettings changed: update");
-static_assert(sizeof(LearnerSettings) == 320, "LearnerSettings changed: update InitialLawKey");
+static_assert(sizeof(LearnerSettings) == 312, "LearnerSettings changed: update InitialLawKey");
 #endif
 
 std::uint64_t Fnv1a(const char* data, std::size_t n, std::uint64_t h = 0xcbf29ce484222325ULL) {
@@ -142,7 +142,7 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->D("learner.optimality_tolerance", s.optimality_tolerance);
   k->D("learner.regularization_min", s.regularization_min);
   k->I("learner.failure_raises", s.failure_raises);
-  k->D("learner.relax_mirror_min", s.relax_mirror_min);
+  k->D("learner.curvature_scale_min", s.curvature_scale_min);
   k->B("learner.start_correction", s.start_correction);
   k->B("learner.restart_on_failure", s.restart_on_failure);
   k->D("learner.restart_alpha", s.restart_alpha);
@@ -166,7 +166,6 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->B("backward.keep_P_trajectory", b.keep_P_trajectory);
   k->D("switching.relative_regularization", s.switching.relative_regularization);
   k->D("switching.max_duration_step", s.switching.max_duration_step);
-  k->D("switching.negative_curvature_scale", s.switching.negative_curvature_scale);
   const OnlineControllerSettings& c = s.controller;
   k->B("controller.interpolate", c.interpolate);
   k->B("controller.warm_start", c.warm_start);

@@ -115,7 +115,6 @@ class BackwardPassSettings:
 class SwitchingTimeSettings:
     relative_regularization: float
     max_duration_step: float
-    negative_curvature_scale: float
     def __init__(self) -> None: ...
 
 class OnlineControllerSettings:
@@ -148,7 +147,7 @@ class LearnerSettings:
     optimality_tolerance: float
     regularization_min: float
     failure_raises: int
-    relax_mirror_min: float
+    curvature_scale_min: float
     max_trials: int
     max_samples: int
     backward: BackwardPassSettings

@@ -885,8 +885,7 @@ class SolveInterrupted(KeyboardInterrupt):
   py::class_<SwitchingTimeSettings>(mod, "SwitchingTimeSettings", "Settings of the switching-time update (31).")
       .def(py::init<>())
       .def_readwrite("relative_regularization", &SwitchingTimeSettings::relative_regularization)
-      .def_readwrite("max_duration_step", &SwitchingTimeSettings::max_duration_step)
-      .def_readwrite("negative_curvature_scale", &SwitchingTimeSettings::negative_curvature_scale);
+      .def_readwrite("max_duration_step", &SwitchingTimeSettings::max_duration_step);
   py::class_<OnlineControllerSettings>(mod, "OnlineControllerSettings", "Settings of the online law (33)-(34).")
       .def(py::init<>())
       .def_readwrite("interpolate", &OnlineControllerSettings::interpolate)
@@ -921,7 +920,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readwrite("optimality_tolerance", &LearnerSettings::optimality_tolerance)
       .def_readwrite("regularization_min", &LearnerSettings::regularization_min)
       .def_readwrite("failure_raises", &LearnerSettings::failure_raises)
-      .def_readwrite("relax_mirror_min", &LearnerSettings::relax_mirror_min)
+      .def_readwrite("curvature_scale_min", &LearnerSettings::curvature_scale_min)
       .def_readwrite("max_trials", &LearnerSettings::max_trials)
       .def_readwrite("max_samples", &LearnerSettings::max_samples)
       .def_readwrite("backward", &LearnerSettings::backward)

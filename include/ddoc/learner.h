@@ -81,9 +81,10 @@ struct LearnerSettings {
   /// Times in a row a line search that would terminate first raises mu to max(10 mu, L_uu
   /// scale) and searches again (docs/engine.md, "A failed line search"). Default 2, Paper() 0.
   int failure_raises = 2;
-  /// kRatio: floor of the mirror's scale in (31), halved when the plant beats the prediction by
-  /// half (docs/engine.md, "Negative curvature"). In (0, 1], 1 = a fixed mirror. Default 1/16.
-  double relax_mirror_min = 1.0 / 16;
+  /// kRatio: floor of sigma, the scale of the model's curvature (the step is alpha / sigma),
+  /// halved when the plant beats the prediction by half (docs/engine.md, "A model that is too
+  /// steep"). In (0, 1], 1 = off. Default 1/16.
+  double curvature_scale_min = 1.0 / 16;
   /// Compare a trial with the nominal as if both had started from the trial's start: (36) and
   /// the Armijo test use I^i + dI_start, dI_start = p_x(0)^T dx0 + 1/2 dx0^T P_xx(0) dx0 (the
   /// value of the pass, dx0 = trial x0 - nominal x0) plus the nominal's cost change under the
@@ -266,6 +267,8 @@ class Learner {
   bool initialized() const { return initialized_; }
   bool converged() const { return status_ == LearnerStatus::kConverged; }
   double alpha() const { return alpha_; }
+  /// sigma (curvature_scale_min): the next trial steps alpha / sigma along the model.
+  double curvature_scale() const { return curvature_scale_; }
   int iteration() const { return iteration_; }
   int trials() const { return trials_; }
   /// Restarts so far (LearnerSettings::restart_on_failure).
@@ -340,7 +343,7 @@ class Learner {
   int trials_ = 0;
   int restarts_ = 0;
   int failure_raises_ = 0;
-  double mirror_scale_ = 1;         // relax_mirror_min: the mirror's scale of the next (31)          // failure_raises used since the last accepted trial
+  double curvature_scale_ = 1;      // sigma: the next trial's step is alpha / sigma          // failure_raises used since the last accepted trial
   bool remeasure_pending_ = false;  // remeasure_nominal: the next trial re-runs the nominal's law
   bool remeasure_trial_ = false;    // the pending trial is such a re-measurement
   int nominal_samples_ = 0;         // re-measurements of the nominal in nominal_cost_

@@ -17,8 +17,6 @@ struct SwitchingTimeSettings {
   /// eigenvalues below floor = relative_regularization * max|lambda(H)| become
   /// max(|lambda|, floor).
   double relative_regularization = 1e-3;
-  /// s of the mirror: a negative eigenvalue becomes max(s |lambda|, floor). In (0, 1], default 1.
-  double negative_curvature_scale = 1.0;
   /// Additional cap |dD_k| <= max_duration_step on each duration change (s); default none.
   double max_duration_step = std::numeric_limits<double>::infinity();
 };
@@ -28,8 +26,6 @@ struct SwitchingTimeStep {
   Vector dT;                  ///< K: delta T_alpha
   Vector T_planned;           ///< K: T^{i+1} = T^i + dT
   double regularization = 0;  ///< largest eigenvalue increase applied (0: H was used as is)
-  /// A negative eigenvalue was mirrored above the floor (the step follows negative curvature).
-  bool mirrored = false;
   /// Predicted cost change of the step, 1/2 dT^T P22 dT + p2^T dT (the modified P22, full p2).
   double model_change = 0;
   BoxQPStatus status = BoxQPStatus::kConverged;
@@ -56,10 +52,10 @@ BoxQPStatus SolveDurationQp(const Matrix& H, const Vector& g, const Vector& lo, 
 /// singular: the Lyapunov P22 has no curvature in D_0 when l does not depend on time). Regularized
 /// Newton step (Levenberg-Marquardt type, eigenvalue modification): with H = V diag(lambda) V^T
 /// and floor = relative_regularization * max|lambda| (1 when H = 0), every lambda_i < floor is
-/// replaced by max(s |lambda_i|, floor), s = negative_curvature_scale. Positive definite H are
-/// used unchanged (exact Newton step in the box); negative curvature is mirrored, so the step
-/// stays a descent direction whose length scales with alpha (a plain shift H + mu I would make
-/// the step huge along the shifted directions).
+/// replaced by max(|lambda_i|, floor). Positive definite H are used unchanged (exact Newton step
+/// in the box); negative curvature is mirrored, so the step stays a descent direction whose length
+/// scales with alpha (a plain shift H + mu I would make the step huge along the shifted
+/// directions).
 ///
 /// Not allocation-free (runs between trials).
 SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVectorRef& T_nominal,

@@ -136,11 +136,8 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
                "noise_margin must be finite and >= 0");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.failure_raises >= 0, "failure_raises must be >= 0");
-  CheckSetting(settings.relax_mirror_min > 0 && settings.relax_mirror_min <= 1,
-               "relax_mirror_min must be in (0, 1]");
-  CheckSetting(settings.switching.negative_curvature_scale > 0 &&
-                   settings.switching.negative_curvature_scale <= 1,
-               "switching.negative_curvature_scale must be in (0, 1]");
+  CheckSetting(settings.curvature_scale_min > 0 && settings.curvature_scale_min <= 1,
+               "curvature_scale_min must be in (0, 1]");
   CheckSetting(settings.switching.relative_regularization > 0 &&
                    std::isfinite(settings.switching.relative_regularization),
                "switching.relative_regularization must be finite and > 0");
@@ -318,7 +315,7 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   }
   initialized_ = true;
   alpha_ = settings_.alpha_initial;
-  mirror_scale_ = 1;
+  curvature_scale_ = 1;
   trials_ = 0;
   restarts_ = 0;
   failure_raises_ = 0;
@@ -355,11 +352,11 @@ OnlineController& Learner::NextTrial() {
     remeasure_trial_ = remeasure_pending_ && status_ != LearnerStatus::kLineSearchFailed;
     return NominalLaw();
   }
-  SwitchingTimeSettings switching = settings_.switching;
-  switching.negative_curvature_scale *= mirror_scale_;
+  // The model with its curvature scaled by sigma: the step alpha / sigma along (31) and (33).
+  const double step = alpha_ / curvature_scale_;
   switching_step_ = SolveSwitchingTimeUpdate(*problem_, nominal_.T, pass_.P22_initial(),
-                                             pass_.p2_initial(), alpha_, switching);
-  controllers_[active_].Load(nominal_, pass_, alpha_, switching_step_.dT);
+                                             pass_.p2_initial(), step, settings_.switching);
+  controllers_[active_].Load(nominal_, pass_, step, switching_step_.dT);
   if (settings_.blend_feedback) {
     // The law that produced the nominal: the accepted trial's (another slot), else u^0.
     const OnlineController* nominal_law =
@@ -461,10 +458,13 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
   r.decrease = r.cost - (nominal_cost_ + r.start_shift);
   const Vector dT = measured.T - nominal_.T;
   r.step = InputDistance(measured, nominal_) + dT.squaredNorm();
-  // The predicted change: alpha on the feed-forward of the u-part, the (31) model for T.
-  const double a = alpha_;
-  r.predicted = a * pass_.predicted_linear() + 0.5 * a * a * pass_.predicted_quadratic() +
-                switching_step_.model_change;
+  // The predicted change: alpha / sigma on the feed-forward of the u-part, the (31) model for T,
+  // both with their curvature scaled by sigma (1 unless curvature_scale_min relaxed it).
+  const double sigma = curvature_scale_;
+  const double a = alpha_ / sigma;
+  const double linear_T = pass_.p2_initial().dot(switching_step_.dT);
+  r.predicted = a * pass_.predicted_linear() + 0.5 * a * a * sigma * pass_.predicted_quadratic() +
+                linear_T + sigma * (switching_step_.model_change - linear_T);
   trial_pending_ = false;
   if (remeasure_trial_) {  // a sample of the nominal's cost, not a candidate
     remeasure_trial_ = false;
@@ -497,12 +497,12 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
                        settings_.acceptance == Acceptance::kPredictedDecrease && r.predicted < 0;
     if (ratio) {
       const double rho = r.decrease / r.predicted;
-      // A mirrored negative curvature that the plant shows to be too steep a model: the measured
-      // decrease beat the prediction by half at the full step, so the next step may go further.
-      if (switching_step_.mirrored && rho > 1.5 && alpha_ >= settings_.alpha_initial) {
-        mirror_scale_ = std::max(settings_.relax_mirror_min, 0.5 * mirror_scale_);
+      // A model that the plant shows to be too steep: at the full step the measured decrease
+      // beat the prediction by half, so the next step may go further (sigma halves).
+      if (rho > 1.5 && alpha_ >= settings_.alpha_initial) {
+        curvature_scale_ = std::max(settings_.curvature_scale_min, 0.5 * curvature_scale_);
       } else if (rho < 0.75) {
-        mirror_scale_ = std::min(1.0, 2.0 * mirror_scale_);
+        curvature_scale_ = std::min(1.0, 2.0 * curvature_scale_);
       }
       if (rho > 0.75) {
         alpha_ = std::min(settings_.alpha_initial, 2.0 * alpha_);
@@ -519,7 +519,11 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     if (mu_ < 1e-6 * luu_scale_) mu_ = settings_.regularization_min;
     UpdateConvergence();
   } else {
-    mirror_scale_ = 1;
+    if (curvature_scale_ < 1) {
+      // A relaxed model that overshot: the next trial is the unscaled model at the same alpha.
+      curvature_scale_ = 1;
+      return Reported(r);
+    }
     double next = settings_.gamma * alpha_;
     if (settings_.interpolate_backtracking && std::isfinite(r.decrease)) {
       // The quadratic through phi(0) = 0, phi'(0) = slope and phi(alpha) = decrease.

@@ -120,9 +120,6 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
                                            double alpha, const SwitchingTimeSettings& settings) {
   problem.Validate();
   const int K = problem.num_modes();
-  if (!(settings.negative_curvature_scale > 0 && settings.negative_curvature_scale <= 1)) {
-    throw InvalidArgument("SolveSwitchingTimeUpdate: negative_curvature_scale must be in (0, 1]");
-  }
   if (T_nominal.size() != K || P22.rows() != K || P22.cols() != K || p2.size() != K) {
     throw InvalidArgument("SolveSwitchingTimeUpdate: T has size " +
                           std::to_string(T_nominal.size()) + ", P22 is " +
@@ -141,8 +138,8 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   Matrix H = S.transpose() * (0.5 * (P22 + P22.transpose())) * S;
   const Vector gD = S.transpose() * p2;
   // Levenberg-Marquardt-type modification of the spectrum: eigenvalues below the floor are
-  // replaced by max(s |lambda|, floor) (negative curvature mirrored with the scale s, zero
-  // curvature floored), so the step keeps scaling with alpha and stays a descent direction.
+  // replaced by max(|lambda|, floor) (negative curvature mirrored, zero curvature floored), so
+  // the step keeps scaling with alpha and stays a descent direction.
   Eigen::SelfAdjointEigenSolver<Matrix> eig(H);
   const Vector& lambda = eig.eigenvalues();
   const double lmax = lambda.cwiseAbs().maxCoeff();
@@ -151,9 +148,7 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   Vector modified = lambda;
   for (int i = 0; i < K; ++i) {
     if (lambda(i) < floor) {
-      const double mirror = settings.negative_curvature_scale * std::abs(lambda(i));
-      if (lambda(i) < 0 && mirror > floor) out.mirrored = true;
-      modified(i) = std::max(mirror, floor);
+      modified(i) = std::max(std::abs(lambda(i)), floor);
       out.regularization = std::max(out.regularization, modified(i) - lambda(i));
     }
   }

@@ -224,6 +224,49 @@ TEST(Learner, IncrementalRejectedTrialsKeepTheNominalAndShrinkAlpha) {
   EXPECT_DOUBLE_EQ(other.alpha(), 0.1);  // interpolated backtracking: the smallest factor
 }
 
+TEST(Learner, TheCurvatureScaleFollowsTheRatioOfMeasuredToPredicted) {
+  // curvature_scale_min (kRatio, the default): at alpha_initial, a measured decrease more than
+  // 1.5x the predicted one halves sigma, and the next trial steps alpha / sigma with a prediction
+  // from the model whose curvature is scaled by sigma; a rejected trial returns to sigma = 1 at
+  // the same alpha; sigma never drops below its floor. The measured cost is given
+  // (CompleteTrial's cost): far below the nominal's (rho >> 1.5) or above it (rejected).
+  LqRig rig;
+  Learner learner(rig.p.problem, LearnerSettings{});
+  learner.Initialize(rig.measured);
+  Trajectory& m = rig.measured;
+  auto trial = [&](double expected_step, bool better) {
+    OnlineController& policy = learner.NextTrial();
+    EXPECT_DOUBLE_EQ(policy.alpha(), expected_step);
+    rig.plant.Run(rig.lq.x0, policy, &m);
+    const double I = learner.nominal_cost();
+    const double cost = I + (better ? -1e3 : 1.0) * std::abs(I);
+    return learner.CompleteTrial(m, nullptr, cost);
+  };
+  EXPECT_DOUBLE_EQ(learner.curvature_scale(), 1.0);
+  EXPECT_TRUE(trial(1.0, true).accepted);
+  EXPECT_DOUBLE_EQ(learner.curvature_scale(), 0.5);
+  EXPECT_TRUE(trial(2.0, true).accepted);
+  EXPECT_DOUBLE_EQ(learner.curvature_scale(), 0.25);
+  const TrialResult relaxed = trial(4.0, false);  // sigma = 1/4 on this nominal
+  EXPECT_FALSE(relaxed.accepted);
+  EXPECT_DOUBLE_EQ(learner.curvature_scale(), 1.0);
+  EXPECT_DOUBLE_EQ(learner.alpha(), 1.0);
+  const TrialResult plain = trial(1.0, false);  // sigma = 1 on the same nominal
+  // Without active bounds the model scaled by sigma predicts 1 / sigma times the decrease.
+  ASSERT_LT(plain.predicted, 0.0);
+  EXPECT_NEAR(relaxed.predicted, 4.0 * plain.predicted, 1e-9 * std::abs(plain.predicted));
+  EXPECT_LT(learner.alpha(), 1.0);  // the rejection at sigma = 1 backtracks
+  // Below alpha_initial sigma stays; alpha grows back to 1, and from there sigma halves to its
+  // floor and stays there.
+  for (int i = 0; i < 12; ++i) {
+    const double alpha = learner.alpha(), sigma = learner.curvature_scale();
+    EXPECT_TRUE(trial(alpha / sigma, true).accepted) << i;
+    EXPECT_DOUBLE_EQ(learner.curvature_scale(),
+                     alpha < 1.0 ? sigma : std::max(0.5 * sigma, 1.0 / 16)) << i;
+  }
+  EXPECT_DOUBLE_EQ(learner.curvature_scale(), LearnerSettings{}.curvature_scale_min);
+}
+
 TEST(Learner, AFailedLineSearchRaisesMuAndSearchesAgainBeforeItTerminates) {
   // (36) never holds: each search takes 4 trials (alpha 1, 0.5, 0.25, 0.125; 0.0625 < 0.1).
   // failure_raises = 2: after the first and the second failed search mu becomes
@@ -508,13 +551,10 @@ TEST(Learner, OnlineLearnerRestartsInsteadOfTerminating) {
   EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
   settings.restart_alpha = 0.0;
   for (const double bad : {0.0, 1.5}) {
-    settings.relax_mirror_min = bad;
+    settings.curvature_scale_min = bad;
     EXPECT_THROW(Learner(p.problem, settings), InvalidArgument) << bad;
   }
-  settings.relax_mirror_min = 1.0 / 16;
-  settings.switching.negative_curvature_scale = 0.0;
-  EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
-  settings.switching.negative_curvature_scale = 1.0;
+  settings.curvature_scale_min = 1.0 / 16;
   settings.switching.relative_regularization = 0.0;
   EXPECT_THROW(Learner(p.problem, settings), InvalidArgument);
   settings.switching.relative_regularization = 1e-3;

@@ -706,24 +706,24 @@ TEST(StandardProblemEngine, AFailedLineSearchOnABangBangNominalRaisesTheRegulari
   EXPECT_GT(cost[0], 10 * cost[1]);
 }
 
-TEST(StandardProblemEngine, AMirroredCurvatureThatIsTooSteepIsRelaxed) {
+TEST(StandardProblemEngine, AModelThatIsTooSteepIsRelaxed) {
   // One start of suite_starts (seed 7, --starts 30, fishing's 4th; its draw rounded to 6
   // digits). Its fishing interval collapses to the minimum duration, and the nominal then
-  // creeps along a direction of negative curvature of (31), 6-9 ms per trial, each measured
-  // decrease twice the predicted one. With a fixed mirror it is still 4.4x above I* after 60
-  // trials; halving the mirror's scale after such trials (relax_mirror_min) lets the step grow,
-  // and the run converges to the reference (25 trials).
+  // creeps 6-9 ms per trial, each measured decrease twice the predicted one: the cost is flat
+  // along the step where the model curves. With the model's curvature as it is, the run is still
+  // 4.4x above I* after 60 trials; halving it after such trials (curvature_scale_min) lets the
+  // step grow, and the run converges to the reference.
   const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("fishing");
   RandomStart start;
   start.durations = (Vector(3) << 5.261397, 2.055393, 4.683210).finished();
   start.offset = -0.349386;
-  for (const double relax : {1.0, LearnerSettings{}.relax_mirror_min}) {
+  for (const double relax : {1.0, LearnerSettings{}.curvature_scale_min}) {
     FunctionPolicy initial = RandomStartPolicy(*sp, start);
     LearnerSettings settings;
-    settings.relax_mirror_min = relax;
+    settings.curvature_scale_min = relax;
     settings.max_trials = 60;
     const SolveResult r = SolveOnModel(*sp, initial, settings);
-    std::printf("relax_mirror_min %g: %s, trials %d, cost %.6g x I*\n", relax,
+    std::printf("curvature_scale_min %g: %s, trials %d, cost %.6g x I*\n", relax,
                 LearnerStatusName(r.status), r.trials, r.cost / sp->reference_cost);
     if (relax == 1.0) {
       EXPECT_EQ(r.status, LearnerStatus::kMaxTrials);

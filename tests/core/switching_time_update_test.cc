@@ -240,46 +240,6 @@ TEST(SwitchingTimeUpdate, TheStepDoesNotDependOnTheScaleOfTheCost) {
   }
 }
 
-// negative_curvature_scale s: a negative eigenvalue lambda of H becomes s |lambda| (above the
-// floor), so the step along it is -g / (s |lambda|). H = diag(2, -0.5) in durations (P22 =
-// S^-T H S^-1), g = (0.1, 0.05): dD = (-0.05, -0.1 / s) while inside the box [0.1, 1] - 0.5.
-TEST(SwitchingTimeUpdate, TheMirrorScaleSetsTheStepAlongNegativeCurvature) {
-  TwoModes t;  // durations in [0.1, 1], final time free
-  const Eigen::Vector2d T(0.5, 1.0);
-  Matrix S_inv(2, 2);
-  S_inv << 1, 0, -1, 1;
-  const Eigen::Vector2d gD(0.1, 0.05);
-  const Matrix P22 = S_inv.transpose() * Eigen::Vector2d(2.0, -0.5).asDiagonal() * S_inv;
-  const Eigen::Vector2d p2 = S_inv.transpose() * gD;
-  for (const double s : {1.0, 0.5, 0.3}) {
-    SwitchingTimeSettings settings;
-    settings.negative_curvature_scale = s;
-    const SwitchingTimeStep step = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0, settings);
-    const Eigen::Vector2d dD(step.dT(0), step.dT(1) - step.dT(0));
-    EXPECT_TRUE(step.mirrored) << "s " << s;
-    EXPECT_NEAR(dD(0), -0.05, 1e-12) << "s " << s;
-    EXPECT_NEAR(dD(1), -0.1 / s, 1e-12) << "s " << s;
-    EXPECT_NEAR(step.regularization, 0.5 + 0.5 * s, 1e-12) << "s " << s;
-    const double model = 0.5 * (2.0 * dD(0) * dD(0) + 0.5 * s * dD(1) * dD(1)) + gD.dot(dD);
-    EXPECT_NEAR(step.model_change, model, 1e-12) << "s " << s;
-  }
-  // s = 0.25: the step reaches the lower bound 0.1 of D_1 exactly; s = 1e-3 puts s |lambda|
-  // below the floor 1e-3 x 2, which takes over: not mirrored, and the box stops the step.
-  for (const double s : {0.25, 1e-3}) {
-    SwitchingTimeSettings settings;
-    settings.negative_curvature_scale = s;
-    const SwitchingTimeStep step = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0, settings);
-    EXPECT_NEAR(step.T_planned(1) - step.T_planned(0), 0.1, 1e-12) << "s " << s;
-    EXPECT_EQ(step.mirrored, s > 0.01) << "s " << s;
-  }
-  for (const double bad : {0.0, -0.5, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
-    SwitchingTimeSettings settings;
-    settings.negative_curvature_scale = bad;
-    EXPECT_THROW(SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0, settings), InvalidArgument)
-        << bad;
-  }
-}
-
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

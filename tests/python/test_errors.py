@@ -65,12 +65,12 @@ def test_engine_validation_reaches_python_with_its_message():
                        duration_max=[1.0, 1.0])
     with pytest.raises(ValueError, match="gamma"):
         ddoc.Learner(ddoc.Problem(system, cost, good), settings)
-    for field, bad in (("relax_mirror_min", 0.0), ("relax_mirror_min", 2.0)):
+    for field, bad in (("curvature_scale_min", 0.0), ("curvature_scale_min", 2.0)):
         settings = ddoc.LearnerSettings()
         setattr(settings, field, bad)
         with pytest.raises(ValueError, match=field):
             ddoc.Learner(ddoc.Problem(system, cost, good), settings)
-    for field, bad in (("negative_curvature_scale", 0.0), ("relative_regularization", -1.0)):
+    for field, bad in (("relative_regularization", 0.0), ("relative_regularization", -1.0)):
         settings = ddoc.LearnerSettings()
         setattr(settings.switching, field, bad)
         with pytest.raises(ValueError, match=field):

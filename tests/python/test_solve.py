@@ -37,10 +37,9 @@ def test_settings_presets_and_attributes():
     default.switching.max_duration_step = 0.05
     default.controller.warm_start = False
     assert default.switching.max_duration_step == 0.05 and not default.controller.warm_start
-    assert default.relax_mirror_min == 1.0 / 16 and default.switching.negative_curvature_scale == 1.0
-    default.relax_mirror_min = 0.5
-    default.switching.negative_curvature_scale = 0.25
-    assert default.relax_mirror_min == 0.5 and default.switching.negative_curvature_scale == 0.25
+    assert default.curvature_scale_min == 1.0 / 16
+    default.curvature_scale_min = 0.5
+    assert default.curvature_scale_min == 0.5
 
 
 def test_max_trials_and_progress():
