@@ -342,8 +342,8 @@ class Learner {
   int iteration_ = 0;
   int trials_ = 0;
   int restarts_ = 0;
-  int failure_raises_ = 0;
-  double curvature_scale_ = 1;      // sigma: the next trial's step is alpha / sigma          // failure_raises used since the last accepted trial
+  int failure_raises_ = 0;          // failure_raises used since the last accepted trial
+  double curvature_scale_ = 1;      // sigma: the next trial's step is alpha / sigma
   bool remeasure_pending_ = false;  // remeasure_nominal: the next trial re-runs the nominal's law
   bool remeasure_trial_ = false;    // the pending trial is such a re-measurement
   int nominal_samples_ = 0;         // re-measurements of the nominal in nominal_cost_
