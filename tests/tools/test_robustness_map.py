@@ -1,6 +1,6 @@
 """tools/robustness_map: the shards of a grid are a partition of it, merging shards gives the bytes of
 an unsharded run, the Slurm array body runs the slice of its task, bad usage names what is wrong,
-the summary counts what the CSV says; most with the fake ddoc-hopper, one short run with the real one
+the summary counts what the CSV says, Ctrl-C keeps every case that ended before it; most with the fake ddoc-hopper, one short run with the real one
 (DDOC_HOPPER, set by CMake)."""
 import csv
 import filecmp
@@ -9,8 +9,12 @@ import importlib.util
 import json
 import math
 import os
+import signal
 import subprocess
+import threading
+import time
 import unittest
+from unittest import mock
 
 from tools_test_util import HERE, PYTHON, ROOT, TOOLS, TempDirTest, run_tool
 
@@ -232,6 +236,33 @@ class ShardMergeTest(TempDirTest):
                                    env=env, timeout=60)
                 self.assertEqual(r.returncode, 2, r.stderr)
                 self.assertIn(needle, r.stderr)
+
+
+class InterruptTest(TempDirTest):
+    def test_ctrl_c_keeps_a_case_that_ended_before_the_loop_took_it(self):
+        # Two runs in parallel. The first ends, and Ctrl-C comes while its row is read, before
+        # the loop takes it: the case is finished and must be written. The second is a run that
+        # the Ctrl-C interrupted (ddoc-hopper exit 4): not finished, not written.
+        out = os.path.join(self.tmp, "map")
+        real, signalled = rm.run_case, threading.Event()
+
+        def run_case(ctx, map_name, name, keys):
+            row = real(ctx, map_name, name, keys)
+            if keys["mass"] == 8:
+                os.kill(os.getpid(), signal.SIGINT)  # the main thread raises KeyboardInterrupt
+                signalled.set()
+                time.sleep(0.5)                      # ... while this row is still being read
+                return row
+            signalled.wait(10)
+            return dict(row, exit="4")
+
+        with mock.patch.object(rm, "run_case", run_case):
+            code = rm.run_main(["--maps", "mass", "--methods", "alg1", "--masses", "8,12",
+                                "--drags", "0", "--speeds", "0.5", "--hops", "12",
+                                "--hopper", FAKE, "--jobs", "2", "--out", out])
+        self.assertEqual(code, 130)
+        self.assertEqual([r["case"] for r in csv_rows(os.path.join(out, "mass_map.csv"))],
+                         ["mass_m8_cd0_v0.5_alg1"])
 
 
 class UsageTest(TempDirTest):
