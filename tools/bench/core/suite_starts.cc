@@ -7,7 +7,7 @@
 // switching instants (a converged run may sit on another stationary point of a nonconvex problem).
 //
 //   suite_starts [--starts 12] [--seed 7] [--preset default|paper] [--max-trials 100]
-//                [--only NAME] [--verbose]
+//                [--only NAME] [--curvature-scale-min S] [--verbose]
 //
 // --verbose prints every start on stderr: its durations and input offset, the status, the
 // trials, the cost against I* and the switching instants against T*.
@@ -64,6 +64,7 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
 int Main(int argc, char** argv) {
   CLI::App app("The standard problems from random starts");
   int starts = 12, seed = 7, max_trials = 100;
+  double curvature_scale_min = LearnerSettings{}.curvature_scale_min;
   std::string preset = "default", only;
   bool verbose = false;
   app.add_option("--starts", starts, "initial guesses per problem")->check(CLI::PositiveNumber);
@@ -72,10 +73,14 @@ int Main(int argc, char** argv) {
   app.add_option("--max-trials", max_trials, "trial budget per run")->check(CLI::PositiveNumber);
   app.add_option("--only", only, "one problem (the others still draw their starts)")
       ->check(CLI::IsMember(testing::StandardProblemNames()));
+  app.add_option("--curvature-scale-min", curvature_scale_min,
+                 "LearnerSettings::curvature_scale_min (1 = the model's curvature never scaled)")
+      ->check(CLI::Range(1e-12, 1.0));
   app.add_flag("--verbose", verbose, "every start on stderr");
   CLI11_PARSE(app, argc, argv);
   LearnerSettings settings = preset == "paper" ? LearnerSettings::Paper() : LearnerSettings{};
   settings.max_trials = max_trials;
+  settings.curvature_scale_min = curvature_scale_min;
   std::mt19937 rng(static_cast<unsigned>(seed));
   std::printf("| problem | converged | at the reference | trials (mean, max) |\n|---|---|---|---|\n");
   for (const std::string& name : testing::StandardProblemNames()) {
