@@ -12,6 +12,7 @@
 // --verbose prints every start on stderr: its durations and input offset, the status, the
 // trials, the cost against I* and the switching instants against T*.
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <string>
 
@@ -75,7 +76,11 @@ int Main(int argc, char** argv) {
       ->check(CLI::IsMember(testing::StandardProblemNames()));
   app.add_option("--curvature-scale-min", curvature_scale_min,
                  "LearnerSettings::curvature_scale_min (1 = the model's curvature never scaled)")
-      ->check(CLI::Range(1e-12, 1.0));
+      ->check([](const std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        return *end == '\0' && v > 0 && v <= 1 ? "" : "must be a number in (0, 1], got " + text;
+      });
   app.add_flag("--verbose", verbose, "every start on stderr");
   CLI11_PARSE(app, argc, argv);
   LearnerSettings settings = preset == "paper" ? LearnerSettings::Paper() : LearnerSettings{};
