@@ -35,6 +35,9 @@ struct HopReport {
   /// takeoff that ends the hop (the first flight state).
   Eigen::Vector4d body_touchdown = Eigen::Vector4d::Zero();
   Eigen::Vector4d body_takeoff = Eigen::Vector4d::Zero();
+  /// The robot's mass from the hop's stance (docs/hopper.md, "The mass from a stance"), kg: the
+  /// floor's vertical impulse / (yd(takeoff) - yd(touchdown) + g T_stance). NaN: no stance.
+  double stance_mass = std::numeric_limits<double>::quiet_NaN();
   // From the trial driver (TrialOutcome):
   bool accepted = false;        ///< (36) held (true for trials it does not judge)
   double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)

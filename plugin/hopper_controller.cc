@@ -272,12 +272,14 @@ void HopperController::Step(const mjData* d) {
 
   // Phase (ContactPhaseDetector), then the state, mapped once in the coordinates this step needs:
   // flight for the control in flight and for x^-(T1) at a touchdown, stance in stance.
+  const bool was_stance = started_ && mode() == hopper::kStance;
   const ContactChange change = detector_.Update(map_, d);
   const bool flight = mode() == hopper::kFlight;
   if (flight || change == ContactChange::kTouchdown) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
   }
   if (!flight) MapStanceState(map_, d, vsa_.state(), xs_.data());
+  if (was_stance) AddStanceImpulse(d, step);
   if (!started_) {
     started_ = true;
     BeginHop(t);
@@ -304,6 +306,18 @@ void HopperController::Step(const mjData* d) {
   effort_ += report_cost_.InputCost(u_) * std::max(step, map_.timestep);
   Record(t);
   if (!flight) last_stance_ = xs_;
+}
+
+void HopperController::AddStanceImpulse(const mjData* d, double h) {
+  // Over [t - h, t] the actuators held d->ctrl (written at t - h) on the state last_stance_. The
+  // foot is massless along the leg, so the floor's force R on it has -F_leg along the leg; the
+  // leg turns about the hip, so R's moment about the hip is J_leg thetadd + tau_hip. R_y follows.
+  const double theta = last_stance_(hopper::kSTheta), r = last_stance_(hopper::kSR);
+  const double thetad = mode() == hopper::kFlight ? xf_(hopper::kThetad) : xs_(hopper::kSThetad);
+  const double thetadd = (thetad - last_stance_(hopper::kSThetad)) / h;
+  const double tau_hip = d->ctrl[map_.act_hip], f_leg = d->ctrl[map_.act_leg];
+  const double tangential = (config_.model.J_leg * thetadd + tau_hip) / r;
+  stance_impulse_ += (f_leg * std::cos(theta) + tangential * std::sin(theta)) * h;
 }
 
 void HopperController::Record(double t) {
@@ -337,6 +351,7 @@ void HopperController::BeginHop(double t) {
   report_.t_start = t;
   report_.apex = xf_(hopper::kY);
   effort_ = 0.0;
+  stance_impulse_ = 0.0;
 }
 
 void HopperController::Touchdown(double t) {
@@ -375,6 +390,10 @@ void HopperController::EndHop(double t) {
   r.du2 = law_->du_squared_integral();
   r.dt2 = law_->dT().squaredNorm();
   r.body_takeoff = BodyState(xf_);
+  const double stance_time = t - r.t_touchdown;
+  const double dyd =
+      r.body_takeoff(3) - r.body_touchdown(3) - robot_model_->opt.gravity[2] * stance_time;
+  if (stance_time > 0 && dyd > 0) r.stance_mass = stance_impulse_ / dyd;
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
   // thread only): then this hop is not learned from.

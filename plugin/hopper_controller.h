@@ -168,6 +168,8 @@ class HopperController {
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void Step(const mjData* d);
   void Touchdown(double t);
+  // Adds the floor's vertical force over the last step [t - h, t] of a stance to stance_impulse_.
+  void AddStanceImpulse(const mjData* d, double h);
   void EndHop(double t);
   void BeginHop(double t);
   void Record(double t);
@@ -224,6 +226,7 @@ class HopperController {
   HopReport report_;            // measured part, filled as the hop runs
   FlightState14 x_touchdown_;
   double effort_ = 0.0;         // int 1/2 u'Ru dt over the hop
+  double stance_impulse_ = 0.0;  // the floor's vertical impulse over the hop's stance, N s
   double foot_td_x_ = 0.0, prev_foot_td_x_ = 0.0;
   bool have_prev_td_ = false;
 

@@ -60,6 +60,7 @@ const HopColumn kHopColumns[] = {
     {"nominal_cost", false, [](const HopReport& h) { return h.nominal_cost; }},
     {"predicted", false, [](const HopReport& h) { return h.predicted; }},
     {"optimality", false, [](const HopReport& h) { return h.optimality; }},
+    {"stance_mass", false, [](const HopReport& h) { return h.stance_mass; }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 

@@ -241,7 +241,7 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   EXPECT_EQ(hops[0],
             "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
             "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-            "optimality");
+            "optimality,stance_mass");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
 }
 

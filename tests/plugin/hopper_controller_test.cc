@@ -264,6 +264,25 @@ TEST(HopperControllerTest, InputsStayInBoundsOverSeveralHops) {
   EXPECT_EQ(rig.c().hop(), 3);
 }
 
+TEST(HopperControllerTest, EachStanceGivesTheMassAboveTheLegSpring) {
+  // HopReport::stance_mass: the floor's vertical impulse over the stance, from the actuator
+  // forces the controller applied and the leg's turning (J_leg thetadd), over the change of the
+  // body's vertical speed plus g T_stance. It weighs what the leg spring carries, the torso and
+  // the 1 g leg at the hip (the 2 g foot rests on the floor), whatever the model believes (10 kg
+  // here). Without the J_leg thetadd term it is 1-8 g off on these robots.
+  for (const char* mjcf : {"hopper_m8.xml", "hopper_m12.xml"}) {
+    Robot rig(mjcf, ControllerConfig(), false);
+    ASSERT_TRUE(rig.ok());
+    const double sprung = rig.m()->body_mass[rig.c().mapping().body_torso] +
+                          rig.m()->body_mass[rig.c().mapping().body_leg];
+    const std::vector<HopReport> reports = rig.Run(4, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 4u) << mjcf;
+    for (const HopReport& r : reports) {
+      EXPECT_NEAR(r.stance_mass, sprung, 1e-4 * sprung) << mjcf << ", hop " << r.hop;
+    }
+  }
+}
+
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the paper's inexact model (10 kg, no drag) on the 8 kg robot with drag, on
   // the paper's reading of the hop (I1 against the hop's own start, terminal cost at T_K, no
