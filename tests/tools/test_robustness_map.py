@@ -1,7 +1,7 @@
 """tools/robustness_map: the shards of a grid are a partition of it, merging shards gives the bytes of
 an unsharded run, the Slurm array body runs the slice of its task, bad usage names what is wrong,
-the summary counts what the CSV says, Ctrl-C keeps every case that ended before it; most with the fake ddoc-hopper, one short run with the real one
-(DDOC_HOPPER, set by CMake)."""
+the summary counts what the CSV says, Ctrl-C keeps every case that ended before it; most with the
+fake ddoc-hopper, one short run with the real one (DDOC_HOPPER, set by CMake)."""
 import csv
 import filecmp
 import importlib.machinery
