@@ -45,6 +45,10 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   const int n = accepted + rejected;
   mean_speed = speed_sum_ / n;
   mean_period = period_sum_ / n;
+  if (std::isfinite(h.stance_mass)) {
+    stance_mass_sum_ += h.stance_mass;
+    mean_stance_mass = stance_mass_sum_ / ++stance_mass_hops_;
+  }
 }
 
 RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(std::move(method)) {
@@ -139,6 +143,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["final_I4"] = s.final_i4;
   j["mean_speed"] = s.mean_speed;
   j["mean_period"] = s.mean_period;
+  j["mean_stance_mass"] = s.mean_stance_mass;  // null when no hop had a stance_mass
   j["accepted"] = s.accepted;
   j["restarts"] = s.restarts;
   j["remeasured"] = s.remeasured;

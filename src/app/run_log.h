@@ -7,6 +7,7 @@
 #ifndef DDOC_APP_RUN_LOG_H_
 #define DDOC_APP_RUN_LOG_H_
 
+#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <stdexcept>
@@ -53,6 +54,7 @@ struct Summary {
   int stopped_hop = -1;      // hop where the line search gave up (alpha < alpha_min); -1: never
   std::string learner_status = "running";  // running | converged | line_search_failed | none
   double final_cost = 0.0, final_i4 = 0.0, mean_speed = 0.0, mean_period = 0.0;
+  double mean_stance_mass = std::nan("");  // kg, over the hops with a stance_mass; NaN: none
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
   int accepted = 0, rejected = 0;
@@ -69,7 +71,8 @@ struct Summary {
   void AddHop(const plugin::HopReport& hop, bool learns);
 
  private:
-  double speed_sum_ = 0.0, period_sum_ = 0.0;
+  double speed_sum_ = 0.0, period_sum_ = 0.0, stance_mass_sum_ = 0.0;
+  int stance_mass_hops_ = 0;
 };
 
 /// Opens DIR/{hops,trajectory,events}.csv (creating DIR) and writes the headers.

@@ -243,6 +243,17 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
             "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
             "optimality,stance_mass");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
+  // summary.json's mean_stance_mass is the mean of the hops' stance_mass (the last column), which
+  // weighs the 8 kg robot's torso and leg (8.001 kg), not the model's 10 kg.
+  ASSERT_GT(hops.size(), 1u);
+  double sum = 0;
+  for (size_t i = 1; i < hops.size(); ++i) sum += std::stod(hops[i].substr(hops[i].rfind(',') + 1));
+  const double mean = sum / static_cast<double>(hops.size() - 1);
+  EXPECT_NEAR(mean, 8.001, 1e-3);
+  const std::string summary = ReadFile(dir_ / "run" / "summary.json");
+  const size_t at = summary.find("\"mean_stance_mass\": ");
+  ASSERT_NE(at, std::string::npos) << summary;
+  EXPECT_NEAR(std::stod(summary.substr(at + 20)), mean, 1e-6) << summary;
 }
 
 TEST_F(CliTest, HopEventsCarryTheBodyState) {
