@@ -297,6 +297,9 @@ class RealRunTest(TempDirTest):
         [mass] = csv_rows(os.path.join(out, "mass_map.csv"))
         self.assertEqual((mass["case"], mass["exit"], mass["hops"], mass["survived"],
                           mass["learner_status"]), ("mass_m9_cd0.01_v0.5_ocfb", "0", "5", "1", "none"))
+        # The robot the map wrote weighs what the map says: its stances measure the torso's 9 kg
+        # and the 1 g leg.
+        self.assertAlmostEqual(float(mass["stance_mass"]), 9.001, delta=0.001)
         with open(os.path.join(out, "robots", "hopper_m9_cd0.01.xml")) as f:
             robot = f.read()
         self.assertIn('mass="9.0"', robot)
