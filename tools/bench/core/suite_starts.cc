@@ -65,7 +65,7 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
 int Main(int argc, char** argv) {
   CLI::App app("The standard problems from random starts");
   int starts = 12, seed = 7, max_trials = 100;
-  double curvature_scale_min = LearnerSettings{}.curvature_scale_min;
+  double curvature_scale_min = 1;
   std::string preset = "default", only;
   bool verbose = false;
   app.add_option("--starts", starts, "initial guesses per problem")->check(CLI::PositiveNumber);
@@ -74,9 +74,11 @@ int Main(int argc, char** argv) {
   app.add_option("--max-trials", max_trials, "trial budget per run")->check(CLI::PositiveNumber);
   app.add_option("--only", only, "one problem (the others still draw their starts)")
       ->check(CLI::IsMember(testing::StandardProblemNames()));
-  app.add_option("--curvature-scale-min", curvature_scale_min,
-                 "LearnerSettings::curvature_scale_min (1 = the model's curvature never scaled)")
-      ->check([](const std::string& text) -> std::string {
+  CLI::Option* curvature = app.add_option(
+      "--curvature-scale-min", curvature_scale_min,
+      "LearnerSettings::curvature_scale_min (1 = the model's curvature never scaled; default: the "
+      "preset's)");
+  curvature->check([](const std::string& text) -> std::string {
         char* end = nullptr;
         const double v = std::strtod(text.c_str(), &end);
         return *end == '\0' && v > 0 && v <= 1 ? "" : "must be a number in (0, 1], got " + text;
@@ -85,7 +87,7 @@ int Main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   LearnerSettings settings = preset == "paper" ? LearnerSettings::Paper() : LearnerSettings{};
   settings.max_trials = max_trials;
-  settings.curvature_scale_min = curvature_scale_min;
+  if (curvature->count() > 0) settings.curvature_scale_min = curvature_scale_min;
   std::mt19937 rng(static_cast<unsigned>(seed));
   std::printf("| problem | converged | at the reference | trials (mean, max) |\n|---|---|---|---|\n");
   for (const std::string& name : testing::StandardProblemNames()) {
