@@ -24,6 +24,7 @@
 
 #include "ddoc/hopper/nominal_gait.h"
 #include "ddoc/mujoco/hopper_sim.h"
+#include "mujoco_warnings.h"
 #include "scenario.h"
 
 namespace {
@@ -122,6 +123,7 @@ int main(int argc, char** argv) {
   app.add_option("--push", o.pushes, "a push TIME,FORCE,DURATION (s, N, s); repeatable");
   app.add_option("--out", o.out, "output directory")->required();
   CLI11_PARSE(app, argc, argv);
+  ddoc::app::RouteMujocoWarnings("ddoc-drop");
   try {
     ddoc::HopperSim sim(o.model);
     Eigen::Matrix<double, 14, 1> x0;

@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <cstdio>
 
+#include "mujoco_warnings.h"
+
 #ifdef DDOC_HAVE_RENDER
 #include "ddoc/render/frame_recorder.h"
 #endif
@@ -15,6 +17,7 @@
 namespace ddoc::app {
 
 int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv) {
+  RouteMujocoWarnings(tool);
   try {
     return run(argc, argv);
   } catch (const RunError& e) {

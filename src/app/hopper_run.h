@@ -42,7 +42,8 @@ class RunError : public std::runtime_error {
   int code_;
 };
 
-/// The body of the tools' main(): runs `run`; a RunError escaping it is printed as
+/// The body of the tools' main(): sends MuJoCo's warnings to stderr (mujoco_warnings.h), runs
+/// `run`; a RunError escaping it is printed as
 /// "<tool>: <message>" and ends with its code, any other exception as "<tool>: internal error:
 /// <message>" with kExitError.
 int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char** argv);

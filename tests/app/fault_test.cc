@@ -70,8 +70,8 @@ class FaultTest : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  // Starts ddoc-hopper with `args` (output to dir_/console.txt), with a file size limit in bytes
-  // when fsize > 0.
+  // Starts ddoc-hopper in dir_ with `args` (output to dir_/console.txt), with a file size limit
+  // in bytes when fsize > 0.
   void Start(const std::vector<std::string>& args, long fsize = 0) {
     std::vector<std::string> argv = {DDOC_HOPPER_BIN};
     argv.insert(argv.end(), args.begin(), args.end());
@@ -81,6 +81,7 @@ class FaultTest : public ::testing::Test {
     if (pid_ == 0) {
       std::FILE* out = std::freopen(console.c_str(), "w", stdout);
       if (out == nullptr || dup2(fileno(stdout), STDERR_FILENO) < 0) _exit(126);
+      if (chdir(dir_.c_str()) != 0) _exit(126);
       if (fsize > 0) {
         const rlimit limit{static_cast<rlim_t>(fsize), static_cast<rlim_t>(fsize)};
         if (setrlimit(RLIMIT_FSIZE, &limit) != 0) _exit(126);
@@ -183,6 +184,11 @@ TEST_F(FaultTest, ANonFiniteStateEndsWithExitSix) {
       << Console();
   EXPECT_GE(DataRows(out / "hops.csv"), 1);
   ExpectSummaryMatchesHops(out, "nonfinite_state");
+  // MuJoCo's warning is on stderr, named, and not in a MUJOCO_LOG.TXT of the working directory.
+  EXPECT_NE(Console().find("ddoc-hopper: MuJoCo warning: Nan, Inf or huge value in QACC"),
+            std::string::npos)
+      << Console();
+  EXPECT_FALSE(fs::exists(dir_ / "MUJOCO_LOG.TXT"));
 }
 
 TEST_F(FaultTest, AFileSizeLimitEndsWithExitFiveAndKeepsEveryHop) {

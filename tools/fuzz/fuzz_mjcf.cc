@@ -8,8 +8,17 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <mujoco/mujoco.h>
+
 #include "ddoc/mujoco/hopper_sim.h"
 #include "fuzz_util.h"
+
+// MuJoCo warns about many malformed inputs (a NaN in the XML, ...): expected here. Its default
+// handler would print each and append it to MUJOCO_LOG.TXT in the working directory.
+extern "C" int LLVMFuzzerInitialize(int* /*argc*/, char*** /*argv*/) {
+  mju_user_warning = [](const char*) {};
+  return 0;
+}
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string path =

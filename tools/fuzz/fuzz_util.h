@@ -10,7 +10,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -18,19 +17,26 @@
 namespace ddoc::fuzz {
 
 /// A copy of DDOC_MODELS_DIR (MJCFs and scenarios/) in $TMPDIR/ddoc_fuzz_<tag>_<pid>, made once
-/// per process and removed at exit.
+/// per process and removed when the process exits through exit() (static destruction).
+/// tools/fuzz/run_all.sh also points TMPDIR at a directory it removes itself.
 inline const std::filesystem::path& ModelsCopy(const char* tag) {
   namespace fs = std::filesystem;
-  static const fs::path dir = [tag] {
-    const fs::path d = fs::temp_directory_path() /
-                       ("ddoc_fuzz_" + std::string(tag) + "_" + std::to_string(getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    fs::copy(DDOC_MODELS_DIR, d, fs::copy_options::recursive);
-    std::atexit([] { std::error_code ec; fs::remove_all(dir, ec); });
-    return d;
-  }();
-  return dir;
+  struct Copy {
+    fs::path dir;
+    explicit Copy(const char* t)
+        : dir(fs::temp_directory_path() /
+              ("ddoc_fuzz_" + std::string(t) + "_" + std::to_string(getpid()))) {
+      fs::remove_all(dir);
+      fs::create_directories(dir);
+      fs::copy(DDOC_MODELS_DIR, dir, fs::copy_options::recursive);
+    }
+    ~Copy() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  };
+  static const Copy copy(tag);
+  return copy.dir;
 }
 
 /// Writes the input to `path` (truncating) and returns it.

@@ -48,6 +48,8 @@ for target in fuzz_scenario fuzz_mjcf fuzz_flags fuzz_law; do
     exit 2
   fi
   work=$(mktemp -d "${TMPDIR:-/tmp}/ddoc_fuzz_${target}_XXXXXX")
+  # The target's own temporary files (its copy of models/) go here, removed even after a crash.
+  scratch=$(mktemp -d "${TMPDIR:-/tmp}/ddoc_fuzz_${target}_tmp_XXXXXX")
   crash="${TMPDIR:-/tmp}/ddoc_fuzz_${target}_crash"
   mkdir -p "$crash"
   corpus=("$work")
@@ -58,19 +60,27 @@ for target in fuzz_scenario fuzz_mjcf fuzz_flags fuzz_law; do
   log="$work.log"
   start=$(date +%s.%N)
   # -close_fd_mask=1: MuJoCo's warnings on stdout would drown the log.
-  if "$bin" -runs="$runs" -seed="$seed" -max_len=16384 -timeout=10 -rss_limit_mb=2048 \
+  if TMPDIR="$scratch" "$bin" -runs="$runs" -seed="$seed" -max_len=16384 -timeout=10 -rss_limit_mb=2048 \
        -malloc_limit_mb=2048 -close_fd_mask=1 -print_final_stats=1 \
        -artifact_prefix="$crash/" "${dict[@]}" "${corpus[@]}" >"$log" 2>&1; then
     done_runs=$(grep -o 'Done [0-9]* runs' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
     secs=$(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')
+    if [ -n "$(ls -A "$scratch")" ]; then
+      # A target that ends normally removes what it wrote (fuzz_util.h's ModelsCopy).
+      echo "$target: FAILED: left $(ls -A "$scratch" | head -3 | tr '\n' ' ')in its TMPDIR"
+      rm -rf "$scratch"
+      status=1
+      continue
+    fi
     printf '%s: %s inputs, %.1f s, ok\n' "$target" "$done_runs" "$secs"
   else
     echo "$target: FAILED (log: $log; input kept in $crash/)"
     grep -E 'ERROR|SUMMARY|runtime error|==[0-9]+==' "$log" | head -20 || true
+    rm -rf "$scratch"
     status=1
     continue
   fi
-  rm -rf "$work" "$log"
+  rm -rf "$work" "$log" "$scratch"
   rmdir "$crash" 2>/dev/null || true
 done
 exit $status
