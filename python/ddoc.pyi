@@ -239,8 +239,15 @@ def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
     offline_latency, log_every, law_cache); progress(row) after every hop; PNG frames into
     render_dir when HAVE_RENDER. Returns the columns of hops.csv as NumPy arrays, 'trajectory'
     (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law.
-    Ctrl-C raises SolveInterrupted with the partial result."""
+    Ctrl-C raises SolveInterrupted with the partial result; a controller failure or a
+    non-finite MuJoCo state raises RunFailed with it; MuJoCo's warnings are RuntimeWarnings."""
     ...
+
+class RunFailed(RuntimeError):
+    """run_hopper ended early; .end is "error" or "nonfinite_state" (ddoc-hopper's exits 1 and
+    6), .result the table of the hops completed before."""
+    result: Optional[Dict[str, Any]]
+    end: Optional[str]
 
 def to_dataframe(table: Dict[str, Any]) -> Any:
     """The dict of equal-length arrays `table` as a pandas DataFrame (other plain values in

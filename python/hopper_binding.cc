@@ -7,6 +7,7 @@
 // when the build renders.
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
+#include <pybind11/eval.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
@@ -17,6 +18,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <mujoco/mujoco.h>
 
 #include "hopper_run.h"
 
@@ -135,6 +138,29 @@ std::string PushText(const py::handle& item, size_t index) {
   return text;
 }
 
+// MuJoCo's warnings as Python RuntimeWarnings ("MuJoCo warning: ...") while run_hopper runs,
+// instead of MuJoCo's default stdout and MUJOCO_LOG.TXT in the working directory.
+void WarnInPython(const char* message) {
+  py::gil_scoped_acquire gil;  // the stepping loop runs without the GIL
+  const std::string text = std::string("MuJoCo warning: ") + message;
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, text.c_str(), 1) != 0) {
+    // A warnings filter made it an error; it cannot propagate through MuJoCo: print it.
+    PyErr_Clear();
+    std::fprintf(stderr, "ddoc.run_hopper: %s\n", text.c_str());
+  }
+}
+
+class ScopedMujocoWarnings {
+ public:
+  ScopedMujocoWarnings() : previous_(mju_user_warning) { mju_user_warning = WarnInPython; }
+  ~ScopedMujocoWarnings() { mju_user_warning = previous_; }
+  ScopedMujocoWarnings(const ScopedMujocoWarnings&) = delete;
+  ScopedMujocoWarnings& operator=(const ScopedMujocoWarnings&) = delete;
+
+ private:
+  void (*previous_)(const char*);
+};
+
 app::LoadedRun Load(const std::string& scenario, const app::RunOverrides& overrides) {
   try {
     return app::LoadRun(scenario, overrides);
@@ -179,6 +205,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) {
     throw py::value_error("progress: expected a callable or None");
   }
+  const ScopedMujocoWarnings warnings;
   app::LoadedRun run = Load(scenario, overrides);
   const std::string method_name = app::MethodName(run.scenario.method);
   std::unique_ptr<app::RunFrames> frames;
@@ -191,9 +218,10 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   }
 
   std::vector<std::vector<double>> hop_table(kNumHopColumns), trajectory(kNumTrajectoryColumns);
-  std::string fall_reason, error;
+  std::string fall_reason, error, end;  // end: summary.json's value when the run failed
   bool fell = false, interrupted = false;
   double last_cost = std::nan(""), last_speed = std::nan("");
+  double sim_time = run.data->time;  // of the last finite state (MuJoCo's reset zeroes time)
   {
     py::gil_scoped_release release;
     app::RunStepper stepper(&run);
@@ -211,10 +239,14 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
     while (!done()) {
       const app::StepOutcome outcome = stepper.Step();
       ++step;
-      if (outcome.kind == app::StepOutcome::Kind::kFailed) {
+      if (outcome.kind == app::StepOutcome::Kind::kFailed ||
+          outcome.kind == app::StepOutcome::Kind::kNonFinite) {
+        // As ddoc-hopper's exits 1 and 6; MuJoCo reset the state after a non-finite one.
         error = outcome.reason;
+        end = outcome.kind == app::StepOutcome::Kind::kFailed ? "error" : "nonfinite_state";
         break;
       }
+      sim_time = run.data->time;
       if (log_every > 0 && step % log_every == 0) {
         const Eigen::Matrix<double, 14, 1>& x = stepper.state();
         trajectory[0].push_back(run.data->time);
@@ -253,7 +285,6 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   std::string render_error;
   if (!frames->Finish(&render_error)) throw std::runtime_error("render: " + render_error);
   const long frame_count = frames->frame_count();
-  if (!error.empty()) throw std::runtime_error("run_hopper: " + error);
   py::dict out;
   for (size_t k = 0; k < kNumHopColumns; ++k) {
     out[kHopColumns[k].name] =
@@ -268,9 +299,19 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   out["method"] = method_name;
   out["fell"] = fell;
   out["fall_reason"] = fall_reason;
-  out["sim_time"] = run.data->time;
+  out["sim_time"] = sim_time;
   out["frames"] = frame_count;
   out["initial_law"] = run.controller->law_cache_status();
+  if (!error.empty()) {
+    py::object cls = py::module_::import("ddoc").attr("RunFailed");
+    py::object exc = cls("run_hopper: " + error + " (after " +
+                         std::to_string(hop_table[0].size()) +
+                         " hops; the partial table is in .result)");
+    exc.attr("result") = out;
+    exc.attr("end") = end;
+    PyErr_SetObject(cls.ptr(), exc.ptr());
+    throw py::error_already_set();
+  }
   if (interrupted) {
     py::object cls = py::module_::import("ddoc").attr("SolveInterrupted");
     py::object exc = cls("run_hopper interrupted after " + std::to_string(hop_table[0].size()) +
@@ -285,6 +326,15 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
 }  // namespace
 
 void BindHopper(py::module_& mod) {
+  py::exec(R"(
+class RunFailed(RuntimeError):
+    """run_hopper ended early: the controller failed (.end "error") or MuJoCo's state was not
+    finite (.end "nonfinite_state"), as ddoc-hopper's exits 1 and 6; .result holds the table of
+    the hops completed before."""
+    result = None
+    end = None
+)", mod.attr("__dict__"));
+  mod.attr("RunFailed").attr("__module__") = "ddoc";
 #ifdef DDOC_HAVE_RENDER
   mod.attr("HAVE_RENDER") = true;  // the module links ddoc_render, as ddoc_app_run does
 #else
@@ -318,13 +368,14 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
-learner_cost, nominal_cost, predicted, optimality); 'trajectory', a
+learner_cost, nominal_cost, predicted, optimality, stance_mass); 'trajectory', a
 dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written) and initial_law (where u^0 came from, as summary.json's
 initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
-ddoc.SolveInterrupted with the partial result in .result.)");
+ddoc.SolveInterrupted with the partial result in .result; a controller failure or a non-finite
+MuJoCo state raises ddoc.RunFailed with it in .result; MuJoCo's warnings are RuntimeWarnings.)");
 }
 
 }  // namespace python

@@ -187,3 +187,19 @@ def test_run_hopper_ctrl_c_keeps_partial_table():
     table = info.value.result
     assert 0 < len(table["hop"]) < 5000
     assert list(table["hop"]) == list(range(len(table["hop"])))
+
+
+def test_run_hopper_non_finite_state_raises_run_failed(tmp_path, monkeypatch):
+    # A 1e300 N push makes MuJoCo's qacc huge; MuJoCo warns and resets the state. The run must end
+    # there (ddoc-hopper's exit 6), with the hops before it, not go on from the reset pose.
+    monkeypatch.chdir(tmp_path)
+    with pytest.warns(RuntimeWarning, match="MuJoCo warning: Nan, Inf or huge value in QACC"):
+        with pytest.raises(ddoc.RunFailed, match="non-finite state: MuJoCo found a NaN, Inf or "
+                                                 "huge value in qacc at t = 1.5005 s") as info:
+            ddoc.run_hopper(SCENARIO, hops=20, pushes=["1.5,1e300,0.05"], log_every=0)
+    assert info.value.end == "nonfinite_state"
+    table = info.value.result
+    assert len(table["hop"]) >= 1 and list(table["hop"]) == list(range(len(table["hop"])))
+    # sim_time is the last finite state's (the message's t), not the reset's 0.0005 s.
+    assert table["t_end"][-1] <= 1.5 and table["sim_time"] == pytest.approx(1.5005, abs=1e-9)
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
