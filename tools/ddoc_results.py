@@ -863,18 +863,26 @@ def result_row(run, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0):
     row["mean_speed"] = float(np.nanmean(h["speed"][sel])) if n else None
     row["mean_period"] = float(np.nanmean(h["T2"][sel])) if n else None
     row["mean_step"] = float(np.nanmean(h["step_length"][sel])) if n else None
+    row["end"], row["end_message"] = run.summary.get("end"), run.summary.get("end_message")
     s_hops = run.summary.get("hops")
     row["summary_hops"] = s_hops if isinstance(s_hops, int) else None
     return row
 
 
 def _status(row):
-    ec = row["exit_code"]
-    if ec not in (None, 0, 3):
-        return f"error (exit {ec})"
+    ec, end, message = row["exit_code"], row.get("end"), row.get("end_message") or ""
     if row["fell"]:
         why = f": {row['fall_reason']}" if row["fall_reason"] else ""
         return f"fell in hop {row['fall_hop']}{why}"
+    # summary.json's end: how ddoc-hopper ended (docs/reliability.md); "running" if it was killed.
+    if end == "running":
+        return "incomplete (summary.json says running: killed, or still going)"
+    if end not in (None, "completed", "fell"):
+        if end == "nonfinite_state" and message:
+            return message  # "non-finite state: ..."
+        return f"{end}: {message}" if message else end
+    if ec not in (None, 0, 3):
+        return f"error (exit {ec})"
     if ec == 3:
         return "fell (exit 3)"
     return "ok"
@@ -916,7 +924,8 @@ def results_markdown(runs, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0, fai
     legend = [
         "",
         f"status: 'fell in hop k' gives the 0-based hop of the fall (events.csv) and the reason "
-        f"(summary.json). hops: complete rows of hops.csv (hops survived). final cost: cost (42) of the last logged "
+        f"(summary.json); a run that ended otherwise than completed or fell shows summary.json's "
+        f"end and end_message. hops: complete rows of hops.csv (hops survived). final cost: cost (42) of the last logged "
         f"hop. I4: penalty of the hop at convergence, or of the last hop if not converged. "
         f"Means over {over}. converged at hop: 0-based hop index at which the convergence test "
         f"held, from summary.json; * = computed from hops.csv as the hop where {delta_i} "

@@ -150,6 +150,7 @@ class HopperRun {
   Summary summary_;
   long step_ = 0;
   double last_cost_ = std::nan(""), last_speed_ = std::nan("");
+  double sim_time_ = 0;  // of the last finite state (MuJoCo's reset after a bad value zeroes time)
   std::vector<bool> push_started_, push_ended_;
   std::deque<plugin::HopReport> pending_;  // hops taken from the controller, not yet in hops.csv
   bool progress_;
@@ -238,10 +239,18 @@ int HopperRun::Steps() {
     }
     const StepOutcome outcome = stepper_.Step();
     ++step_;
+    if (outcome.kind != StepOutcome::Kind::kNonFinite) sim_time_ = run_->data->time;
     if (outcome.kind == StepOutcome::Kind::kFailed) {
       std::fprintf(stderr, "\nddoc-hopper: %s\n", outcome.reason.c_str());
       summary_.fall_reason = outcome.reason;
       return End(kExitError, "error", outcome.reason);
+    }
+    if (outcome.kind == StepOutcome::Kind::kNonFinite) {
+      // Nothing of this step is logged: MuJoCo reset the state to the initial pose, and the
+      // controller saw that pose.
+      if (progress_) std::fputc('\n', stderr);
+      std::fprintf(stderr, "ddoc-hopper: %s\n", outcome.reason.c_str());
+      return End(kExitNonFinite, "nonfinite_state", outcome.reason);
     }
     LogStep();
     LogPushEvents();
@@ -250,11 +259,6 @@ int HopperRun::Steps() {
     if (outcome.kind == StepOutcome::Kind::kFell) {
       Fell(outcome.reason);
       return End(kExitFall, "fell", outcome.reason);
-    }
-    if (outcome.kind == StepOutcome::Kind::kNonFinite) {
-      if (progress_) std::fputc('\n', stderr);
-      std::fprintf(stderr, "ddoc-hopper: %s\n", outcome.reason.c_str());
-      return End(kExitNonFinite, "nonfinite_state", outcome.reason);
     }
   }
   return End(kExitOk, "completed", "");
@@ -313,7 +317,7 @@ void HopperRun::LogHops() {
     const Eigen::Vector4d& to = h.body_takeoff;
     log_->WriteEvent({h.t_touchdown, h.hop, "touchdown", td(0), td(1), td(2), td(3)});
     log_->WriteEvent({h.t_end, h.hop, "takeoff", to(0), to(1), to(2), to(3)});
-    summary_.sim_time_s = run_->data->time;
+    summary_.sim_time_s = sim_time_;
     summary_.wall_time_s = WallTime();
     log_->WriteSummary(summary_);
     last_cost_ = h.cost;
@@ -340,7 +344,7 @@ void HopperRun::Fell(const std::string& reason) {
 
 int HopperRun::Finish(int exit_code) {
   if (progress_) std::fputc('\n', stderr);
-  summary_.sim_time_s = run_->data->time;
+  summary_.sim_time_s = sim_time_;
   summary_.wall_time_s = WallTime();
   try {
     log_->Flush();

@@ -189,6 +189,20 @@ TEST_F(FaultTest, ANonFiniteStateEndsWithExitSix) {
             std::string::npos)
       << Console();
   EXPECT_FALSE(fs::exists(dir_ / "MUJOCO_LOG.TXT"));
+  // The logs end at the last finite state: no sample of MuJoCo's reset pose at t = 0.0005 s.
+  EXPECT_NEAR(std::stod(Field(ReadFile(out / "summary.json"), "sim_time_s")), 1.5005, 1e-9);
+  std::ifstream trajectory(out / "trajectory.csv");
+  std::string line;
+  std::getline(trajectory, line);
+  double t_last = -1;
+  int rows = 0;
+  for (; std::getline(trajectory, line); ++rows) {
+    const double t = std::stod(line.substr(0, line.find(',')));
+    ASSERT_GT(t, t_last) << "row " << rows << ": " << line;
+    t_last = t;
+  }
+  EXPECT_GT(rows, 0);
+  EXPECT_NEAR(t_last, 1.5005, 1e-9);
 }
 
 TEST_F(FaultTest, AFileSizeLimitEndsWithExitFiveAndKeepsEveryHop) {

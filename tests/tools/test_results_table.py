@@ -48,6 +48,29 @@ class ResultsTableTest(TempDirTest):
         self.assertAlmostEqual(float(by[("exact_m8", "alg1")][6]), np.mean(run.hops["speed"]),
                                places=3)
 
+    def test_status_shows_how_the_run_ended(self):
+        import json
+        import shutil
+        ends = {"nonfinite_state": ("non-finite state: MuJoCo found a NaN, Inf or huge value in "
+                                    "qacc at t = 1.5005 s", "non-finite state: MuJoCo found a NaN"),
+                "interrupted": ("interrupted by SIGINT at t = 2.0 s", "interrupted: interrupted by"),
+                "io_error": ("cannot write \"x\"", "io_error: cannot write"),
+                "running": ("", "incomplete (summary.json says running"),
+                "completed": ("", "ok")}
+        for end, (message, status) in ends.items():
+            run = os.path.join(self.tmp, end, "exact_m8_alg1")
+            shutil.copytree(run_dir("exact_m8_alg1"), run)
+            path = os.path.join(run, "summary.json")
+            with open(path) as f:
+                summary = json.load(f)
+            summary.update(end=end, end_message=message)
+            with open(path, "w") as f:
+                json.dump(summary, f)
+            p = run_tool("results_table.py", run, "--out", "-")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertTrue(table_rows(p.stdout)[0][2].startswith(status),
+                            (end, table_rows(p.stdout)[0][2]))
+
     def test_tail_and_eps_options(self):
         p = run_tool("results_table.py", run_dir("exact_m8_alg1"), "--out", "-", "--tail", "2",
                      "--eps", "1e-2", "--delta-i", "2")
