@@ -34,6 +34,9 @@ bool CheckNumbers(const RenderSettings& s, std::string* error) {
         << s.height;
   } else if (!(s.fps > 0) || !std::isfinite(s.fps)) {
     msg << "fps must be > 0 and finite, got " << s.fps;
+  } else if (s.fps > RenderSettings::kMaxFps) {
+    msg << "fps must be at most " << RenderSettings::kMaxFps
+        << " (more frames than physics steps only repeat them, one file each), got " << s.fps;
   } else if (!(s.camera_distance > 0) || !std::isfinite(s.camera_distance)) {
     msg << "camera_distance must be > 0 and finite, got " << s.camera_distance;
   } else if (!std::isfinite(s.camera_azimuth) || !std::isfinite(s.camera_elevation) ||

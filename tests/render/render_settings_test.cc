@@ -65,13 +65,21 @@ TEST_F(RenderSettingsTest, RejectsZeroOrNegativeSize) {
   ExpectInvalid(s, "width");
 }
 
-TEST_F(RenderSettingsTest, RejectsZeroNegativeOrNonFiniteFps) {
+TEST_F(RenderSettingsTest, RejectsZeroNegativeNonFiniteOrTooLargeFps) {
   for (double bad : {0.0, -1.0, -60.0, std::numeric_limits<double>::quiet_NaN(),
                      std::numeric_limits<double>::infinity()}) {
     RenderSettings s = Valid();
     s.fps = bad;
     ExpectInvalid(s, "fps must be > 0 and finite");
   }
+  // 1e9 fps wrote 500 000 copies of each 0.5 ms step's frame until the disk was full.
+  RenderSettings s = Valid();
+  s.fps = 1e9;
+  ExpectInvalid(s, "fps must be at most 1000 (more frames than physics steps only repeat them, "
+                   "one file each), got 1e+09");
+  s.fps = RenderSettings::kMaxFps;
+  std::string error;
+  EXPECT_TRUE(s.Validate(&error)) << error;
 }
 
 TEST_F(RenderSettingsTest, RejectsBadCameraAndQualityFields) {

@@ -24,7 +24,7 @@ struct RenderSettings {
   int width = 640;
   /// Image height in pixels, > 0 (at most kMaxImageSize).
   int height = 480;
-  /// Frames per second of simulated time, > 0 and finite.
+  /// Frames per second of simulated time, in (0, kMaxFps].
   double fps = 60;
   /// Body whose world x the camera follows. Empty: the camera stays at lookat_x.
   std::string track_body = "torso";
@@ -66,6 +66,8 @@ struct RenderSettings {
 
   /// Largest accepted width or height in pixels.
   static constexpr int kMaxImageSize = 8192;
+  /// Largest accepted fps: beyond one frame per physics step frames only repeat, one file each.
+  static constexpr double kMaxFps = 1000;
 
   /// Checks every field and prepares the output directory: creates `dir` (and parents)
   /// when missing and checks that a file can be created in it. Call it before the
