@@ -31,7 +31,7 @@ constexpr std::uint32_t kFormat = 1;
 #if defined(__x86_64__) && defined(__GLIBCXX__)
 static_assert(sizeof(HopperParams) == 64, "HopperParams changed: update InitialLawKey");
 static_assert(sizeof(HopperCostWeights) == 160, "HopperCostWeights changed: update InitialLawKey");
-static_assert(sizeof(NominalGaitSettings) == 48, "NominalGaitSettings changed: update the key");
+static_assert(sizeof(NominalGaitSettings) == 56, "NominalGaitSettings changed: update the key");
 static_assert(sizeof(HopperModeDurations) == 32, "HopperModeDurations changed: update the key");
 static_assert(sizeof(BackwardPassSettings) == 48, "BackwardPassSettings changed: update the key");
 static_assert(sizeof(SwitchingTimeSettings) == 16, "SwitchingTimeSettings changed: update the key");
@@ -372,6 +372,7 @@ std::string InitialLawKey(const ControllerConfig& c) {
   k.I("gait.max_iterations", g.max_iterations);
   k.I("gait.continuation_stages", g.continuation_stages);
   k.D("gait.dt", g.dt);
+  // gait.max_periodicity is not keyed: it only decides whether a gait is an error, not which.
   k.D("durations.flight_min", c.durations.flight_min);
   k.D("durations.flight_max", c.durations.flight_max);
   k.D("durations.stance_min", c.durations.stance_min);

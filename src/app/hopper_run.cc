@@ -213,8 +213,10 @@ void StartController(LoadedRun* run) {
   std::string error;
   run->controller = plugin::HopperController::Create(run->model.get(), run->config, &error);
   if (!run->controller) {
-    // A bad --offline-latency is bad input; anything else failed inside the controller.
-    const bool input = error.find("offline_latency") != std::string::npos;
+    // A bad --offline-latency or a gait speed without a gait is bad input; anything else failed
+    // inside the controller.
+    const bool input = error.find("offline_latency") != std::string::npos ||
+                       error.find("no periodic gait") != std::string::npos;
     throw RunError(input ? kExitBadInput : kExitError, error);
   }
   run->controller->Reset(run->model.get(), run->data.get());

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
 
 #include "ddoc/check_derivatives.h"
@@ -147,6 +148,14 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
   HopperCost cost(model, w);
   cost.SetReference(g.x0);
   g.periodicity = cost.Switching(hopper::kStance, g.hop.x_to_minus);
+  if (!(g.periodicity <= s.max_periodicity)) {
+    std::ostringstream msg;
+    msg << "FindNominalGait: no periodic gait at " << s.forward_speed << " m/s (apex "
+        << s.apex_height << " m, k0_hip " << s.k0_hip << ", k0_leg " << s.k0_leg
+        << "): the search ends at I1 = " << g.periodicity << ", above " << s.max_periodicity
+        << "; a lower speed may have one";
+    throw InvalidArgument(msg.str());
+  }
   for (int j : kWeighted) {
     g.max_abs_residual = std::max(g.max_abs_residual, std::abs(g.hop.x_to_plus(j) - g.x0(j)));
   }

@@ -82,6 +82,8 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
   const std::string good = Scenario("default.xml");
   std::ofstream(dir_ / "broken.xml") << "<ddoc_scenario><robot mjcf='x.xml'>";
   std::ofstream(dir_ / "bad_robot.xml") << "<mujoco><worldbody/></mujoco>";
+  std::ofstream(dir_ / "fast.xml") << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR
+                                   << "/hopper_m8.xml'/><gait speed='5'/></ddoc_scenario>\n";
   std::ofstream(dir_ / "typo.xml") << "<ddoc_scenario>\n<robot mjcf='" << DDOC_MODELS_DIR
                                    << "/hopper_m8.xml'/>\n<learning cyclic='0.99'/>\n"
                                    << "</ddoc_scenario>\n";
@@ -106,6 +108,7 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --hops 1e12", "--hops"},
       {good + " --log-every 0", "--log-every must be >= 1"},
       {good + " --offline-latency -1", "offline_latency"},
+      {Out("fast.xml"), "no periodic gait at 5 m/s"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 namespace ddoc {
 namespace {
 
@@ -55,6 +57,31 @@ TEST(NominalGaitTest, HeavyRobotStillHops) {
   EXPECT_NEAR(g0.apex, 0.8, 0.01);
   ExpectInDesignRange(g0);
   EXPECT_LT(g0.max_abs_residual, 1e-3);
+}
+
+TEST(NominalGaitTest, ASpeedWithoutAPeriodicGaitIsAnError) {
+  // On the 10 kg drag-free model the search reaches I1 ~ 1e-19 up to 2.6 m/s and ends near 0.05
+  // from 2.7 m/s on (a 2.7 m/s "gait" is not a hop of the model: its controller would be nonsense).
+  NominalGaitSettings s;
+  s.forward_speed = 2.6;
+  EXPECT_LT(FindNominalGait(HopperParams(), s).periodicity, 1e-12);
+  s.forward_speed = 2.7;
+  try {
+    FindNominalGait(HopperParams(), s);
+    ADD_FAILURE() << "no error at 2.7 m/s";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("FindNominalGait: no periodic gait at 2.7 m/s"),
+              std::string::npos)
+        << e.what();
+  }
+  // Drag leaves a residual far below the bound: 12 kg, c_d 0.05 at 1.5 m/s.
+  HopperParams p;
+  p.M = 12.0;
+  p.c_d = 0.05;
+  s.forward_speed = 1.5;
+  const NominalGait g = FindNominalGait(p, s);
+  EXPECT_GT(g.periodicity, 1e-6);
+  EXPECT_LT(g.periodicity, 1e-3);
 }
 
 TEST(NominalGaitTest, RejectsBadSettings) {

@@ -21,6 +21,7 @@ struct NominalGaitSettings {
   int max_iterations = 60;     ///< Levenberg-Marquardt iterations per continuation stage
   int continuation_stages = 4; ///< forward speed is ramped 0 -> forward_speed in this many stages
   double dt = 1e-3;            ///< RK4 step of the hop simulation, s
+  double max_periodicity = 1e-2;  ///< largest I1 of the result accepted as a gait (else throws)
 };
 
 /// A near-periodic hop of the analytic model under constant u0.
@@ -47,7 +48,8 @@ struct NominalGait {
 /// redone with yd0 held at its initial value.
 /// A constant-input hop is conservative except for the touchdown loss (41), so exact periodicity
 /// needs v_f_theta = 0 at touchdown; the residual left is reported in the result.
-/// Throws ddoc::InvalidArgument for invalid params/settings.
+/// Throws ddoc::InvalidArgument for invalid params/settings, and when the search ends at
+/// I1 > max_periodicity: no periodic gait at that speed (e.g. 2.7 m/s and more on the 10 kg model).
 NominalGait FindNominalGait(const HopperParams& params,
                             const NominalGaitSettings& settings = NominalGaitSettings());
 
