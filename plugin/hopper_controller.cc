@@ -76,6 +76,7 @@ std::unique_ptr<HopperController> HopperController::Create(const mjModel* m,
   try {
     ValidateConfig(config);
     std::unique_ptr<HopperController> c(new HopperController(m, config));
+    CheckSpringsAreStableAtTheTimestep(m, c->map_, "the robot's mjModel");
     c->Initialize();
     return c;
   } catch (const std::exception& e) {

@@ -192,7 +192,8 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   try {
     run.scenario = ScenarioWithOverrides(scenario_path, overrides);
     run.model = LoadMjcf(run.scenario.robot_mjcf);
-    HopperMapping::Build(run.model.get(), run.scenario.robot_mjcf);  // errors name the file
+    const HopperMapping map = HopperMapping::Build(run.model.get(), run.scenario.robot_mjcf);
+    CheckSpringsAreStableAtTheTimestep(run.model.get(), map, run.scenario.robot_mjcf);
     params = ModelParams(run.scenario);
   } catch (const std::exception& e) {
     throw RunError(kExitBadInput, e.what());

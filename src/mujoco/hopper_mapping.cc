@@ -1,8 +1,12 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/mujoco/hopper_mapping.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <vector>
+
+#include "ddoc/hopper/hopper_model.h"
 
 namespace ddoc {
 
@@ -167,6 +171,42 @@ HopperMapping HopperMapping::Build(const mjModel* m, const std::string& source,
   if (!(map.beta > 0.0)) Fail(source, "<numeric name='vsa_beta'> must be > 0");
   map.timestep = m->opt.timestep;
   return map;
+}
+
+void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& map,
+                                        const std::string& source) {
+  mjData* d = mj_makeData(m);
+  if (d == nullptr) Fail(source, "mj_makeData failed");
+  mj_fwdPosition(m, d);  // the joint-space inertia M at qpos0, factorized
+  struct Spring {
+    int dof;
+    double k_max;
+    const char* what;
+    const char* inertia_unit;
+  };
+  const Spring springs[] = {
+      {map.dof_leg, hopper::InputUpperBound()(3), "leg spring (k_leg up to 2350 N/m)",
+       "effective mass on joint 'leg', kg"},
+      {map.dof_hip, hopper::InputUpperBound()(2), "hip spring (k_hip up to 150 N m/rad)",
+       "effective inertia on joint 'hip', kg m^2"}};
+  std::vector<mjtNum> e(static_cast<size_t>(m->nv)), minv_e(static_cast<size_t>(m->nv));
+  std::ostringstream os;
+  for (const Spring& sp : springs) {
+    std::fill(e.begin(), e.end(), 0.0);
+    e[static_cast<size_t>(sp.dof)] = 1.0;
+    mj_solveM(m, d, minv_e.data(), e.data(), 1);
+    const double inertia = 1.0 / minv_e[static_cast<size_t>(sp.dof)];  // effective, others free
+    const double ratio = std::sqrt(sp.k_max / inertia) * m->opt.timestep;
+    if (!(ratio < 2.0)) {
+      os << "timestep " << m->opt.timestep << " s is too long for the " << sp.what << ": "
+         << "sqrt(k / I) * timestep = " << ratio << " with I = " << inertia << " ("
+         << sp.inertia_unit << "), and the explicit spring grows from 2 on; use a timestep below "
+         << 2.0 * std::sqrt(inertia / sp.k_max) << " s";
+      break;
+    }
+  }
+  mj_deleteData(d);
+  if (!os.str().empty()) Fail(source, os.str());
 }
 
 void MapFlightState(const HopperMapping& map, const mjData* d, const VsaState& vsa, double* x) {

@@ -60,6 +60,7 @@ HopperSim::HopperSim(const std::string& mjcf_path, const HopperSimSettings& sett
       vsa_(map_.beta),
       detector_(settings.contact) {
   HopperParamsFromModel(model_.get(), mjcf_path);  // validates masses and inertias
+  CheckSpringsAreStableAtTheTimestep(model_.get(), map_, mjcf_path);
 }
 
 void HopperSim::SetFlightState(const Eigen::Matrix<double, 14, 1>& x, double t) {

@@ -1,5 +1,6 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 // The MJCF variants and the errors for bad MJCF input.
+#include <cmath>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -119,6 +120,33 @@ TEST(HopperMjcfTest, NonPositiveMassOrInertiaNamesFileLineAndBody) {
                        "hopper.xml", {"hopper_limbs.xml", "line", "body 'leg'", "diaginertia"});
   ExpectErrorAfterEdit("hopper.xml", "diaginertia=\"2.5 2.5 2.5\"", "diaginertia=\"-2.5 2.5 2.5\"",
                        "hopper.xml", {"hopper.xml", "body 'torso'", "diaginertia"});
+}
+
+// The VSA springs are explicit (ctrl held over a step): a timestep at which a spring grows is an
+// error naming it. The bound 2 sqrt(I / k) is computed here from the bodies: the leg spring
+// moves the 2 g foot against the rest of the robot (reduced mass), so I = m_f m_r / (m_f + m_r).
+TEST(HopperMjcfTest, ATimestepAtWhichASpringGrowsIsAnError) {
+  const double m_foot = 0.002, m_rest = 8.001;  // hopper_m8.xml: torso 8 kg, leg 1 g
+  const double leg_limit = 2.0 * std::sqrt(m_foot * m_rest / (m_foot + m_rest) / 2350.0);
+  EXPECT_NEAR(leg_limit, 0.0018448, 1e-7);
+  {
+    ModelCopy copy;  // just below the bound: loads (and the shipped 0.5 ms does, above)
+    copy.Edit("hopper_common.xml", "timestep=\"0.0005\"", "timestep=\"0.00184\"");
+    EXPECT_NO_THROW(HopperSim sim(copy.Path("hopper_m8.xml")));
+  }
+  ExpectErrorAfterEdit("hopper_common.xml", "timestep=\"0.0005\"", "timestep=\"0.002\"",
+                       "hopper_m8.xml",
+                       {"hopper_m8.xml", "timestep 0.002 s is too long for the leg spring",
+                        "effective mass on joint 'leg'", "use a timestep below 0.0018448"});
+  // The hip spring binds first with a short, light leg: r0 = 0.1 m, J_leg = 1e-5 kg m^2; the
+  // hip's effective inertia is then about J_leg + m_f r0^2 = 3e-5 (bound 0.89 ms).
+  ModelCopy copy;
+  copy.Edit("hopper_limbs.xml", "diaginertia=\"0.25 0.25 0.25\"", "diaginertia=\"1e-5 1e-5 1e-5\"");
+  copy.Edit("hopper_limbs.xml", "<body name=\"foot\" pos=\"0 0 -0.7\">",
+            "<body name=\"foot\" pos=\"0 0 -0.1\">");
+  copy.Edit("hopper_common.xml", "timestep=\"0.0005\"", "timestep=\"0.001\"");
+  ExpectError(copy.Path("hopper_m8.xml"),
+              {"timestep 0.001 s is too long for the hip spring", "use a timestep below 0.000"});
 }
 
 }  // namespace

@@ -73,6 +73,15 @@ struct HopperMapping {
                              const HopperNames& names = HopperNames());
 };
 
+/// For an MJCF that is simulated as the robot (not one only read for the model's numbers): the
+/// VSA springs enter as ctrl held over each step (explicit), so a spring of stiffness k on its
+/// joint's effective inertia I (1 / (M^-1)_jj at qpos0, the other joints free) grows once
+/// sqrt(k / I) * timestep >= 2. Throws HopperSimError naming the joint, the ratio and the largest
+/// stable timestep for the leg (k_leg up to 2350 N/m on the foot) and the hip (k_hip up to
+/// 150 N m/rad).
+void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& map,
+                                        const std::string& source);
+
 /// Flight state (14, see file comment) from d and the VSA states. x must point to 14 doubles.
 void MapFlightState(const HopperMapping& map, const mjData* d, const VsaState& vsa, double* x);
 /// Stance state (10) from d and the VSA states. x must point to 10 doubles.
