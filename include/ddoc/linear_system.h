@@ -15,7 +15,7 @@ namespace ddoc {
 /// K with E_{K-1} (n_0 x n_{K-1}) as the cycle reset. No switching surfaces.
 class LinearSystem : public SwitchedSystem {
  public:
-  /// Throws InvalidArgument naming the matrix whose size is wrong.
+  /// Throws InvalidArgument naming the matrix whose size is wrong or that has a non-finite entry.
   LinearSystem(std::vector<Matrix> A, std::vector<Matrix> B, std::vector<Matrix> E);
 
   const Matrix& A(int k) const { return A_[static_cast<size_t>(k)]; }

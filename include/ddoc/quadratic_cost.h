@@ -12,11 +12,13 @@ namespace ddoc {
 
 /// l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k and
 /// phi_k = 1/2 (x - s_k)' S_k (x - s_k), one entry per mode in every list: Q_k, S_k n_k x n_k,
-/// r_k, s_k of size n_k, R_k m x m (0 x 0 without inputs). Derivatives are exact; evaluation
-/// allocates nothing.
+/// r_k, s_k of size n_k, R_k m x m (0 x 0 without inputs). Q, R and S are kept as their
+/// symmetric parts (the forms' values; a nonsymmetric Q gave Q x as the gradient before), which
+/// must be positive semidefinite. Derivatives are exact; evaluation allocates nothing.
 class QuadraticTrackingCost : public SwitchedCost {
  public:
-  /// Throws InvalidArgument naming the entry whose size is wrong.
+  /// Throws InvalidArgument naming the entry whose size is wrong, that has a non-finite entry,
+  /// or whose symmetric part has a negative eigenvalue (below -1e-12 max(1, max |entry|)).
   QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r, std::vector<Matrix> R,
                         std::vector<double> rho, std::vector<Matrix> S, std::vector<Vector> s);
 

@@ -1,6 +1,11 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/quadratic_cost.h"
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -36,6 +41,37 @@ void CheckSize(const Vector& v, Eigen::Index n, const std::string& name) {
   }
 }
 
+template <class M>
+void CheckFinite(const M& v, const std::string& name) {
+  for (Eigen::Index j = 0; j < v.cols(); ++j) {
+    for (Eigen::Index i = 0; i < v.rows(); ++i) {
+      if (!std::isfinite(v(i, j))) {
+        throw InvalidArgument("QuadraticTrackingCost: " + name + " has a non-finite entry at (" +
+                              std::to_string(i) + ", " + std::to_string(j) + ")");
+      }
+    }
+  }
+}
+
+// The form's value only sees the symmetric part; the derivatives Q x, Q are those of the form
+// only for a symmetric Q. So the weights are kept as their symmetric parts, which must be
+// positive semidefinite (else the problem has no minimum in the free directions).
+Matrix SymmetricPsd(const Matrix& M, const std::string& name) {
+  const Matrix sym = 0.5 * (M + M.transpose());
+  if (sym.size() == 0) return sym;
+  const double lowest = Eigen::SelfAdjointEigenSolver<Matrix>(sym, Eigen::EigenvaluesOnly)
+                            .eigenvalues()
+                            .minCoeff();
+  const double scale = std::max(1.0, sym.cwiseAbs().maxCoeff());
+  if (lowest < -1e-12 * scale) {
+    std::ostringstream msg;
+    msg << "QuadraticTrackingCost: " << name << " is not positive semidefinite (the smallest "
+        << "eigenvalue of its symmetric part is " << lowest << ")";
+    throw InvalidArgument(msg.str());
+  }
+  return sym;
+}
+
 }  // namespace
 
 QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r,
@@ -59,6 +95,17 @@ QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<
     CheckSquare(R_[k], R_[0].rows(), Entry("R", k));
     CheckSquare(S_[k], n, Entry("S", k));
     CheckSize(s_[k], n, Entry("s", k));
+    CheckFinite(Q_[k], Entry("Q", k));
+    CheckFinite(r_[k], Entry("r", k));
+    CheckFinite(R_[k], Entry("R", k));
+    if (!std::isfinite(rho_[k])) {
+      throw InvalidArgument("QuadraticTrackingCost: " + Entry("rho", k) + " is not finite");
+    }
+    CheckFinite(S_[k], Entry("S", k));
+    CheckFinite(s_[k], Entry("s", k));
+    Q_[k] = SymmetricPsd(Q_[k], Entry("Q", k));
+    R_[k] = SymmetricPsd(R_[k], Entry("R", k));
+    S_[k] = SymmetricPsd(S_[k], Entry("S", k));
     Qr_.push_back(Q_[k] * r_[k]);
     Ss_.push_back(S_[k] * s_[k]);
   }

@@ -305,6 +305,19 @@ TEST(LinearSystem, EvaluatesItsMatricesAndNamesWrongSizes) {
                    "B[1] is (2, 1), expected (3, 1)");
   ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0, B1}, {E0.transpose()}); },
                    "E[0] is (2, 3), expected (3, 2)");
+  // A NaN in a matrix is named there, not later as a non-finite state of the flow.
+  Matrix bad = A1;
+  bad(2, 1) = std::nan("");
+  ExpectThrowsWith([&] { LinearSystem({A0, bad}, {B0, B1}, {E0}); },
+                   "LinearSystem: A[1] has a non-finite entry at (2, 1)");
+  Matrix bad_b = B0;
+  bad_b(0, 0) = INFINITY;
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {bad_b, B1}, {E0}); },
+                   "B[0] has a non-finite entry at (0, 0)");
+  Matrix bad_e = E0;
+  bad_e(1, 1) = std::nan("");
+  ExpectThrowsWith([&] { LinearSystem({A0, A1}, {B0, B1}, {bad_e}); },
+                   "E[0] has a non-finite entry at (1, 1)");
   // No inputs (m = 0) and a cycle reset.
   const LinearSystem free({A0}, {Matrix::Zero(2, 0)}, {Matrix::Identity(2, 2)});
   EXPECT_EQ(free.input_dim(), 0);
@@ -340,6 +353,43 @@ TEST(QuadraticTrackingCost, EvaluatesTheFormulaAndNamesWrongSizes) {
   ExpectThrowsWith([&] { QuadraticTrackingCost({Q0, Q1}, {r0, r1}, {R, Q0}, {0, 0}, {Q0, Q1},
                                                {r0, r1}); },
                    "R[1] is 2 x 2, expected 1 x 1");
+  // Non-finite entries and weights without a minimum are named.
+  Matrix q_nan = Q0;
+  q_nan(0, 1) = std::nan("");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({q_nan}, {r0}, {R}, {0.0}, {Q0}, {r0}); },
+                   "Q[0] has a non-finite entry at (0, 1)");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0}, {r0}, {R}, {INFINITY}, {Q0}, {r0}); },
+                   "rho[0] is not finite");
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0}, {r0}, {-R}, {0.0}, {Q0}, {r0}); },
+                   "R[0] is not positive semidefinite (the smallest eigenvalue of its symmetric "
+                   "part is -0.3)");
+  Matrix q_indefinite(2, 2);
+  q_indefinite << 1, 2, 2, 1;  // eigenvalues 3 and -1
+  ExpectThrowsWith([&] { QuadraticTrackingCost({Q0}, {r0}, {R}, {0.0}, {q_indefinite}, {r0}); },
+                   "S[0] is not positive semidefinite (the smallest eigenvalue of its symmetric "
+                   "part is -1)");
+}
+
+// A nonsymmetric Q is the form of its symmetric part: the value 1/2 x' Q x and the derivatives
+// agree with central differences (before, lx = Q x was the gradient of another function).
+TEST(QuadraticTrackingCost, ANonsymmetricWeightIsItsSymmetricPart) {
+  const TwoModeMatrices mats;
+  const LinearSystem sys({mats.A0}, {mats.B0}, {});
+  Matrix Q(2, 2), R = Matrix::Constant(1, 1, 0.3);
+  Q << 2, 1.4, -0.4, 1;  // symmetric part [[2, 0.5], [0.5, 1]]
+  const Vector r = (Vector(2) << 1, -1).finished();
+  const QuadraticTrackingCost cost({Q}, {r}, {R}, {0.0}, {Q}, {r});
+  const Vector x = (Vector(2) << 0.3, -0.2).finished(), u = Vector::Constant(1, 0.7);
+  EXPECT_NEAR(cost.Running(0, x, u), 0.5 * (x - r).dot(Q * (x - r)) + 0.5 * 0.3 * 0.49, 1e-15);
+  const DerivativeCheckReport report = CheckDerivatives(sys, &cost, 0, x, u);
+  EXPECT_TRUE(report.PassedPerEntry()) << report.max_entry_error();
+  Vector phix(2);
+  Matrix phixx(2, 2);
+  cost.SwitchingDerivatives(0, x, phix, phixx);
+  Matrix sym(2, 2);
+  sym << 2, 0.5, 0.5, 1;
+  EXPECT_LT((phix - sym * (x - r)).norm(), 1e-15);
+  EXPECT_LT((phixx - sym).norm(), 1e-15);
 }
 
 }  // namespace
