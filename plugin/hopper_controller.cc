@@ -25,6 +25,7 @@ void ValidateConfig(const ControllerConfig& c) {
     throw InvalidArgument(msg.str());
   };
   if (!(c.dt_model > 0.0) || !std::isfinite(c.dt_model)) fail("dt_model", c.dt_model, "> 0");
+  c.model.CheckRk4Step(c.dt_model, "config.dt_model");
   if (c.max_samples_per_mode < 10) {
     fail("max_samples_per_mode", c.max_samples_per_mode, ">= 10");
   }

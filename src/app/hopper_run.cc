@@ -199,6 +199,12 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
     throw RunError(kExitBadInput, e.what());
   }
   run.config = ControllerConfigFor(run.scenario, params);
+  try {  // the model's numbers against the RK4 steps of the model plant and the gait search
+    params.CheckRk4Step(run.config.dt_model, "scenario <model>");
+    params.CheckRk4Step(run.config.gait.dt, "scenario <model>");
+  } catch (const std::exception& e) {
+    throw RunError(kExitBadInput, e.what());
+  }
   if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
   run.config.law_cache = overrides.law_cache;
   if (run.config.law_cache.empty()) {
@@ -214,10 +220,10 @@ void StartController(LoadedRun* run) {
   std::string error;
   run->controller = plugin::HopperController::Create(run->model.get(), run->config, &error);
   if (!run->controller) {
-    // A bad --offline-latency or a gait speed without a gait is bad input; anything else failed
-    // inside the controller.
+    // A bad --offline-latency or a gait the search cannot find is bad input; anything else
+    // failed inside the controller.
     const bool input = error.find("offline_latency") != std::string::npos ||
-                       error.find("no periodic gait") != std::string::npos;
+                       error.find("FindNominalGait") != std::string::npos;
     throw RunError(input ? kExitBadInput : kExitError, error);
   }
   run->controller->Reset(run->model.get(), run->data.get());

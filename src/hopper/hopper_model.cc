@@ -40,6 +40,34 @@ void HopperParams::Validate() const {
   CheckPositive("g", g);
 }
 
+void HopperParams::CheckRk4Step(double dt, const std::string& who) const {
+  Validate();
+  const double k_hip = hopper::InputUpperBound()(2), k_leg = hopper::InputUpperBound()(3);
+  // RK4 is stable for an undamped oscillator while omega dt < 2 sqrt(2), and for a real
+  // eigenvalue -lambda while lambda dt < 2.785.
+  struct Motion {
+    double rate;
+    double limit;
+    const char* what;
+  };
+  const Motion motions[] = {
+      {std::sqrt(k_hip * (1.0 / J_leg + 1.0 / J_body)), 2.0 * std::sqrt(2.0),
+       "sqrt(k_hip (1/J_leg + 1/J_body)) * dt, the flight hip spring at k_hip = 150 N m/rad,"},
+      {std::sqrt(k_leg / M), 2.0 * std::sqrt(2.0),
+       "sqrt(k_leg / M) * dt, the stance leg spring at k_leg = 2350 N/m,"},
+      {beta, 2.785, "beta * dt, the VSA stiffness response,"}};
+  for (const Motion& mo : motions) {
+    if (!(mo.rate * dt < mo.limit)) {
+      std::ostringstream msg;
+      msg << who << ": the model (M = " << M << ", J_body = " << J_body << ", J_leg = " << J_leg
+          << ", beta = " << beta << ") is too stiff for its RK4 step dt = " << dt << " s: "
+          << mo.what << " is " << mo.rate * dt << ", RK4 is stable below " << mo.limit
+          << " (dt below " << mo.limit / mo.rate << " s)";
+      throw InvalidArgument(msg.str());
+    }
+  }
+}
+
 HopperModel::HopperModel(const HopperParams& params)
     : SwitchedSystem({hopper::kFlightDim, hopper::kStanceDim}, hopper::kInputDim, {1, 0},
                      /*has_cycle_reset=*/true),

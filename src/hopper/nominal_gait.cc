@@ -103,6 +103,7 @@ Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGa
 
 NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSettings& s) {
   params.Validate();
+  if (s.dt > 0.0) params.CheckRk4Step(s.dt, "FindNominalGait");
   const Eigen::Vector4d lo = hopper::InputLowerBound();
   const Eigen::Vector4d hi = hopper::InputUpperBound();
   if (!(s.k0_hip >= lo(2) && s.k0_hip <= hi(2) && s.k0_leg >= lo(3) && s.k0_leg <= hi(3))) {

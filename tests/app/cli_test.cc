@@ -82,6 +82,9 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
   const std::string good = Scenario("default.xml");
   std::ofstream(dir_ / "broken.xml") << "<ddoc_scenario><robot mjcf='x.xml'>";
   std::ofstream(dir_ / "bad_robot.xml") << "<mujoco><worldbody/></mujoco>";
+  std::ofstream(dir_ / "stiff.xml") << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR
+                                    << "/hopper_m8.xml'/><model M='10' J_leg='1e-6'/>"
+                                    << "</ddoc_scenario>\n";
   std::ofstream(dir_ / "fast.xml") << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR
                                    << "/hopper_m8.xml'/><gait speed='5'/></ddoc_scenario>\n";
   std::ofstream(dir_ / "typo.xml") << "<ddoc_scenario>\n<robot mjcf='" << DDOC_MODELS_DIR
@@ -109,6 +112,7 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --log-every 0", "--log-every must be >= 1"},
       {good + " --offline-latency -1", "offline_latency"},
       {Out("fast.xml"), "no periodic gait at 5 m/s"},
+      {Out("stiff.xml"), "scenario <model>: the model (M = 10, J_body = 2.5, J_leg = 1e-06"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -266,6 +268,57 @@ TEST(HopSimulatorTest, VerticalHopMatchesTheClosedForm) {
   EXPECT_NEAR(r.t2 - r.t1, stance, 1e-7);
   EXPECT_NEAR(r.apex, 0.7 + yd0 * yd0 / (2 * p.g), 1e-3);  // sampled apex
   EXPECT_NEAR(r.x_to_plus(hopper::kYd), yd0, 1e-7);
+}
+
+// CheckRk4Step's hip bound is where RK4 on the model's own flight flow turns unstable: the hip
+// spring at k_hip = 150 (VSA at rest, beta small) rings down or grows over 0.3 s of flight with
+// J_leg set for omega dt = 2.75 and 2.9.
+TEST(HopperModelTest, TheRk4StepBoundIsWhereTheFlightHipSpringGrows) {
+  const double dt = 1e-3, k_hip = 150.0;
+  auto j_leg_for = [&](double omega_dt, double J_body) {
+    const double w = omega_dt / dt;
+    return 1.0 / (w * w / k_hip - 1.0 / J_body);
+  };
+  for (double omega_dt : {2.75, 2.9}) {
+    HopperParams p;
+    p.J_leg = j_leg_for(omega_dt, p.J_body);
+    p.beta = 1e-3;  // the stiffness stays at k0
+    const bool stable = omega_dt < 2.0 * std::sqrt(2.0);
+    if (stable) {
+      EXPECT_NO_THROW(p.CheckRk4Step(dt, "test"));
+    } else {
+      try {
+        p.CheckRk4Step(dt, "test");
+        ADD_FAILURE() << "no error at omega dt = " << omega_dt;
+      } catch (const InvalidArgument& e) {
+        EXPECT_NE(std::string(e.what()).find("the flight hip spring"), std::string::npos)
+            << e.what();
+      }
+    }
+    const HopperModel model(p);
+    V14 x = V14::Zero();
+    x(hopper::kY) = 5.0;
+    x(hopper::kR) = p.r0;
+    x(hopper::kTheta) = 0.01;  // hip deflection phi - theta = -0.01
+    x(hopper::kKhip) = k_hip;
+    x(hopper::kKleg) = 2000.0;
+    const std::vector<HopSample> run =
+        IntegrateMode(model, hopper::kFlight, x, Eigen::Vector4d(0, 0, k_hip, 2000.0), 0.3, dt);
+    const V14 end = run.back().x;
+    const double deflection = std::abs(end(hopper::kPhi) - end(hopper::kTheta));
+    if (stable) {
+      EXPECT_LT(deflection, 0.011) << omega_dt;
+    } else {
+      EXPECT_GT(deflection, 1.0) << omega_dt;
+    }
+  }
+  HopperParams stiff_vsa;
+  stiff_vsa.beta = 3000.0;  // beta dt = 3 > 2.785
+  EXPECT_THROW(stiff_vsa.CheckRk4Step(dt, "test"), InvalidArgument);
+  HopperParams light;
+  light.M = 0.2;  // sqrt(2350 / 0.2) dt = 0.108: fine
+  EXPECT_NO_THROW(light.CheckRk4Step(dt, "test"));
+  EXPECT_NO_THROW(HopperParams().CheckRk4Step(dt, "test"));
 }
 
 }  // namespace

@@ -68,6 +68,11 @@ struct HopperParams {
 
   /// Throws ddoc::InvalidArgument naming the first bad field (expected vs actual).
   void Validate() const;
+  /// Throws ddoc::InvalidArgument, naming `who` and the fields, when an RK4 step dt is outside
+  /// RK4's stability region for the stiffest motions at the input bounds: the flight hip spring
+  /// (sqrt(k_hip (1/J_leg + 1/J_body)) dt < 2 sqrt(2)), the stance leg spring (sqrt(k_leg / M) dt
+  /// < 2 sqrt(2)) and the VSA (beta dt < 2.78).
+  void CheckRk4Step(double dt, const std::string& who) const;
 };
 
 /// The analytic hopper as a K = 2 switched system (flight, stance), m = 4.
