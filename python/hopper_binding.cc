@@ -5,9 +5,9 @@
 // (the columns of hops.csv) and the per-step trajectory (the columns of trajectory.csv) as NumPy
 // arrays, a progress callback per hop, PNG frames through app::RunFrames (ddoc::FrameRecorder)
 // when the build renders.
+#include <pybind11/eval.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
-#include <pybind11/eval.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 

@@ -195,11 +195,8 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
     const HopperMapping map = HopperMapping::Build(run.model.get(), run.scenario.robot_mjcf);
     CheckSpringsAreStableAtTheTimestep(run.model.get(), map, run.scenario.robot_mjcf);
     params = ModelParams(run.scenario);
-  } catch (const std::exception& e) {
-    throw RunError(kExitBadInput, e.what());
-  }
-  run.config = ControllerConfigFor(run.scenario, params);
-  try {  // the model's numbers against the RK4 steps of the model plant and the gait search
+    run.config = ControllerConfigFor(run.scenario, params);
+    // The model's numbers against the RK4 steps of the model plant and the gait search.
     params.CheckRk4Step(run.config.dt_model, "scenario <model>");
     params.CheckRk4Step(run.config.gait.dt, "scenario <model>");
   } catch (const std::exception& e) {
