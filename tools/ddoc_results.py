@@ -293,6 +293,8 @@ def load_run(path, need_trajectory=False, label=None):
 # ---------------------------------------------------------------------------------------------------
 
 MODELS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "models")
+# The sweep tools' default --build: the tree's build/ (tools/setup.sh), wherever they are run from.
+DEFAULT_BUILD = os.path.join(os.path.dirname(MODELS), "build")
 
 
 def default_law_cache(env, out_dir):

@@ -287,6 +287,20 @@ class UsageTest(TempDirTest):
 
 @unittest.skipUnless(os.access(HOPPER, os.X_OK), "DDOC_HOPPER (the ddoc-hopper binary) not set")
 class RealRunTest(TempDirTest):
+    def test_the_default_build_is_the_trees_wherever_it_runs(self):
+        # No --hopper, no --build, run from a directory that has no build/: the tree's
+        # build/bin/ddoc-hopper (it was cwd/build, "not found" from anywhere but the tree's root).
+        default = os.path.join(ROOT, "build", "bin", "ddoc-hopper")
+        if not os.access(default, os.X_OK):
+            self.skipTest(f"{default} not built")
+        out = os.path.join(self.tmp, "map")
+        r = run_tool("robustness_map", "--maps", "mass", "--methods", "ocfb", "--hops", "1",
+                     "--masses", "10", "--drags", "0", "--speeds", "0.5", "--out", out,
+                     "--jobs", "1", cwd=self.tmp)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        [mass] = csv_rows(os.path.join(out, "mass_map.csv"))
+        self.assertEqual((mass["exit"], mass["hops"]), ("0", "1"))
+
     def test_one_mass_and_one_push_case(self):
         out = os.path.join(self.tmp, "map")
         r = run_tool("robustness_map", "--methods", "ocfb", "--hops", "5", "--masses", "9",
