@@ -1,26 +1,16 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/linear_system.h"
 
-#include <cmath>
 #include <string>
 #include <utility>
+
+#include "check_finite.h"
 
 namespace ddoc {
 namespace {
 
 std::string Shape(const Matrix& M) {
   return "(" + std::to_string(M.rows()) + ", " + std::to_string(M.cols()) + ")";
-}
-
-void CheckFinite(const Matrix& M, const std::string& name) {
-  for (Eigen::Index j = 0; j < M.cols(); ++j) {
-    for (Eigen::Index i = 0; i < M.rows(); ++i) {
-      if (!std::isfinite(M(i, j))) {
-        throw InvalidArgument("LinearSystem: " + name + " has a non-finite entry at (" +
-                              std::to_string(i) + ", " + std::to_string(j) + ")");
-      }
-    }
-  }
 }
 
 // The state sizes n_k of A, after checking the sizes of A, B and E.
@@ -49,8 +39,8 @@ std::vector<int> CheckedStateDims(const std::vector<Matrix>& A, const std::vecto
                             std::to_string(A[k].rows()) + ", " + std::to_string(B[0].cols()) +
                             ")");
     }
-    CheckFinite(A[k], "A" + i);
-    CheckFinite(B[k], "B" + i);
+    internal::CheckFiniteEntries(A[k], "LinearSystem: A" + i);
+    internal::CheckFiniteEntries(B[k], "LinearSystem: B" + i);
     n.push_back(static_cast<int>(A[k].rows()));
   }
   for (size_t k = 0; k < E.size(); ++k) {
@@ -60,7 +50,7 @@ std::vector<int> CheckedStateDims(const std::vector<Matrix>& A, const std::vecto
                             ", expected (" + std::to_string(next.rows()) + ", " +
                             std::to_string(A[k].rows()) + ")");
     }
-    CheckFinite(E[k], "E[" + std::to_string(k) + "]");
+    internal::CheckFiniteEntries(E[k], "LinearSystem: E[" + std::to_string(k) + "]");
   }
   return n;
 }

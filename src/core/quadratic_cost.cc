@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "check_finite.h"
+
 namespace ddoc {
 namespace {
 
@@ -38,18 +40,6 @@ void CheckSize(const Vector& v, Eigen::Index n, const std::string& name) {
   if (v.size() != n) {
     throw InvalidArgument("QuadraticTrackingCost: " + name + " has size " +
                           std::to_string(v.size()) + ", expected " + std::to_string(n));
-  }
-}
-
-template <class M>
-void CheckFinite(const M& v, const std::string& name) {
-  for (Eigen::Index j = 0; j < v.cols(); ++j) {
-    for (Eigen::Index i = 0; i < v.rows(); ++i) {
-      if (!std::isfinite(v(i, j))) {
-        throw InvalidArgument("QuadraticTrackingCost: " + name + " has a non-finite entry at (" +
-                              std::to_string(i) + ", " + std::to_string(j) + ")");
-      }
-    }
   }
 }
 
@@ -95,14 +85,14 @@ QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<
     CheckSquare(R_[k], R_[0].rows(), Entry("R", k));
     CheckSquare(S_[k], n, Entry("S", k));
     CheckSize(s_[k], n, Entry("s", k));
-    CheckFinite(Q_[k], Entry("Q", k));
-    CheckFinite(r_[k], Entry("r", k));
-    CheckFinite(R_[k], Entry("R", k));
+    internal::CheckFiniteEntries(Q_[k], "QuadraticTrackingCost: " + Entry("Q", k));
+    internal::CheckFiniteEntries(r_[k], "QuadraticTrackingCost: " + Entry("r", k));
+    internal::CheckFiniteEntries(R_[k], "QuadraticTrackingCost: " + Entry("R", k));
     if (!std::isfinite(rho_[k])) {
       throw InvalidArgument("QuadraticTrackingCost: " + Entry("rho", k) + " is not finite");
     }
-    CheckFinite(S_[k], Entry("S", k));
-    CheckFinite(s_[k], Entry("s", k));
+    internal::CheckFiniteEntries(S_[k], "QuadraticTrackingCost: " + Entry("S", k));
+    internal::CheckFiniteEntries(s_[k], "QuadraticTrackingCost: " + Entry("s", k));
     Q_[k] = SymmetricPsd(Q_[k], Entry("Q", k));
     R_[k] = SymmetricPsd(R_[k], Entry("R", k));
     S_[k] = SymmetricPsd(S_[k], Entry("S", k));
