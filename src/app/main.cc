@@ -363,9 +363,11 @@ int HopperRun::Finish(int exit_code) {
   }
   log_->FlushQuietly();
   exit_code = frames_->Finish(o_, exit_code);
-  std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s, final cost %.4g, wrote %s\n",
-               summary_.scenario.c_str(), summary_.method.c_str(), summary_.hops,
-               summary_.fell ? "FELL" : summary_.end.c_str(), summary_.final_cost, o_.out.c_str());
+  char cost[48] = "";
+  if (summary_.hops > 0) std::snprintf(cost, sizeof(cost), ", final cost %.4g", summary_.final_cost);
+  std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s%s, wrote %s\n", summary_.scenario.c_str(),
+               summary_.method.c_str(), summary_.hops,
+               summary_.fell ? "FELL" : summary_.end.c_str(), cost, o_.out.c_str());
   return exit_code;
 }
 

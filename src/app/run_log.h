@@ -53,7 +53,9 @@ struct Summary {
   int converged_hop = -1;    // -1: not converged
   int stopped_hop = -1;      // hop where the line search gave up (alpha < alpha_min); -1: never
   std::string learner_status = "running";  // running | converged | line_search_failed | none
-  double final_cost = 0.0, final_i4 = 0.0, mean_speed = 0.0, mean_period = 0.0;
+  // NaN (null in summary.json) until a hop is complete.
+  double final_cost = std::nan(""), final_i4 = std::nan(""), mean_speed = std::nan(""),
+         mean_period = std::nan("");
   double mean_stance_mass = std::nan("");  // kg, over the hops with a stance_mass; NaN: none
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;

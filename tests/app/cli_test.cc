@@ -263,6 +263,22 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   EXPECT_NEAR(std::stod(summary.substr(at + 20)), mean, 1e-6) << summary;
 }
 
+// A run that ends before its first hop is complete has no cost, speed or period: null in
+// summary.json (it wrote 0.0, a cost no run can have) and none in the last message.
+TEST_F(CliTest, ARunWithoutACompleteHopHasNoCost) {
+  const Result r =
+      RunCli(Scenario("default.xml") + " --hops 0 --seconds 0.2 -q --out " + Out("run"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("default alg1: 0 hops, completed, wrote"), std::string::npos)
+      << r.output;
+  const std::string summary = ReadFile(dir_ / "run" / "summary.json");
+  for (const char* field : {"final_cost", "final_I4", "mean_speed", "mean_period",
+                            "mean_stance_mass"}) {
+    EXPECT_NE(summary.find(std::string("\"") + field + "\": null"), std::string::npos)
+        << field << ": " << summary;
+  }
+}
+
 TEST_F(CliTest, HopEventsCarryTheBodyState) {
   // Touchdown and takeoff rows give the COM at the event: about r0 = 0.7 m high (leg angle
   // near 0.1 rad), moving forward at about the gait's 0.5 m/s, and ahead of the touchdown
