@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "ddoc/hopper/hopper_model.h"
+#include "ddoc/mujoco/hopper_sim.h"
 
 namespace ddoc {
 
@@ -175,9 +176,9 @@ HopperMapping HopperMapping::Build(const mjModel* m, const std::string& source,
 
 void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& map,
                                         const std::string& source) {
-  mjData* d = mj_makeData(m);
-  if (d == nullptr) Fail(source, "mj_makeData failed");
-  mj_fwdPosition(m, d);  // the joint-space inertia M at qpos0, factorized
+  const MjDataPtr d(mj_makeData(m));
+  if (!d) Fail(source, "mj_makeData failed");
+  mj_fwdPosition(m, d.get());  // the joint-space inertia M at qpos0, factorized
   struct Spring {
     int dof;
     double k_max;
@@ -190,23 +191,21 @@ void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& m
       {map.dof_hip, hopper::InputUpperBound()(2), "hip spring (k_hip up to 150 N m/rad)",
        "effective inertia on joint 'hip', kg m^2"}};
   std::vector<mjtNum> e(static_cast<size_t>(m->nv)), minv_e(static_cast<size_t>(m->nv));
-  std::ostringstream os;
   for (const Spring& sp : springs) {
     std::fill(e.begin(), e.end(), 0.0);
     e[static_cast<size_t>(sp.dof)] = 1.0;
-    mj_solveM(m, d, minv_e.data(), e.data(), 1);
+    mj_solveM(m, d.get(), minv_e.data(), e.data(), 1);
     const double inertia = 1.0 / minv_e[static_cast<size_t>(sp.dof)];  // effective, others free
     const double ratio = std::sqrt(sp.k_max / inertia) * m->opt.timestep;
     if (!(ratio < 2.0)) {
+      std::ostringstream os;
       os << "timestep " << m->opt.timestep << " s is too long for the " << sp.what << ": "
          << "sqrt(k / I) * timestep = " << ratio << " with I = " << inertia << " ("
          << sp.inertia_unit << "), and the explicit spring grows from 2 on; use a timestep below "
          << 2.0 * std::sqrt(inertia / sp.k_max) << " s";
-      break;
+      Fail(source, os.str());
     }
   }
-  mj_deleteData(d);
-  if (!os.str().empty()) Fail(source, os.str());
 }
 
 void MapFlightState(const HopperMapping& map, const mjData* d, const VsaState& vsa, double* x) {
