@@ -51,6 +51,12 @@ struct HopReport {
   double predicted = std::numeric_limits<double>::quiet_NaN();
   /// TrialOutcome::optimality: the nominal's first-order optimality after the hop (NaN: not judged)
   double optimality = std::numeric_limits<double>::quiet_NaN();
+  /// Wall time of the offline part that learned from this hop, ms (NaN: the hop was not handed
+  /// to it).
+  double offline_ms = std::numeric_limits<double>::quiet_NaN();
+  /// Simulated time from the hop's end until the law learned from it took effect, ms: the
+  /// configured offline_latency, or with measured_latency max(it, offline_ms) (NaN: no law).
+  double latency_ms = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace ddoc::plugin

@@ -2,6 +2,7 @@
 #include "hopper_controller.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -29,7 +30,12 @@ void ValidateConfig(const ControllerConfig& c) {
   if (c.max_samples_per_mode < 10) {
     fail("max_samples_per_mode", c.max_samples_per_mode, ">= 10");
   }
-  if (!(c.offline_latency >= 0.0 && c.offline_latency < c.durations.flight_min)) {
+  if (c.measured_latency) {
+    // A law that comes after the flight waits for the next one (DeployLawWhenDue).
+    if (!(c.offline_latency >= 0.0) || !std::isfinite(c.offline_latency)) {
+      fail("offline_latency", c.offline_latency, "finite and >= 0 (measured_latency)");
+    }
+  } else if (!(c.offline_latency >= 0.0 && c.offline_latency < c.durations.flight_min)) {
     fail("offline_latency", c.offline_latency, "in [0, durations.flight_min)");
   }
   if (!(c.pitch_experiment.scale >= 0.0 && c.pitch_experiment.scale <= 1.0)) {
@@ -117,7 +123,7 @@ void HopperController::Initialize() {
   }
   for (TrajectoryRecorder& r : recorders_) r.Reserve(model_, config_.max_samples_per_mode);
   waiting_.reserve(8);
-  if (config_.offline_thread && config_.offline_latency > 0.0) {
+  if (config_.offline_thread && !Synchronous()) {
     worker_ = std::thread([this] { WorkerLoop(); });
   }
 }
@@ -398,8 +404,9 @@ void HopperController::EndHop(double t) {
   if (stance_time > 0 && dyd > 0) r.stance_mass = stance_impulse_ / dyd;
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
-  // thread only): then this hop is not learned from.
-  if (job_.load(std::memory_order_acquire) != Job::kIdle) {
+  // thread only) or the law it learned has not taken effect yet (measured_latency): then this
+  // hop is not learned from.
+  if (job_.load(std::memory_order_acquire) != Job::kIdle || law_pending_) {
     r.accepted = false;
     r.learner_cost = std::numeric_limits<double>::quiet_NaN();
     waiting_.push_back({r, false});
@@ -411,9 +418,10 @@ void HopperController::EndHop(double t) {
   waiting_.push_back({r, true});
   recording_ = 1 - recording_;  // the finished hop's recorder now belongs to the offline part
   job_hop_ = hop_;
+  job_end_ = t;
   ++hop_;
   job_.store(Job::kPosted, std::memory_order_release);
-  if (config_.offline_latency == 0.0) {
+  if (Synchronous()) {
     RunOffline();  // synchronous: the old behaviour, for comparison only
     law_ = next_law_;
   } else {
@@ -432,6 +440,7 @@ void HopperController::EndHop(double t) {
 
 void HopperController::RunOffline() {
   if (job_.load(std::memory_order_acquire) != Job::kPosted) return;
+  const auto start = std::chrono::steady_clock::now();
   try {
     recorders_[1 - recording_].Finish(&trial_);
     outcome_ = driver_->CompleteTrial(trial_);
@@ -447,6 +456,8 @@ void HopperController::RunOffline() {
     offline_error_ = std::string("offline part: ") + e.what();
     next_law_ = &fallback_;
   }
+  offline_seconds_ =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   job_.store(Job::kDone, std::memory_order_release);
   if (!worker_.joinable()) TakeOfflineResult();
 }
@@ -457,8 +468,14 @@ void HopperController::TakeOfflineResult() {
     failed_ = true;
     error_ = offline_error_;
   }
+  // measured_latency: the law takes effect no sooner than this computer produced it.
+  double latency = config_.offline_latency;
+  if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
+  if (law_pending_) law_due_ = job_end_ + latency;
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;
+    w.report.offline_ms = 1e3 * offline_seconds_;
+    if (law_pending_) w.report.latency_ms = 1e3 * latency;
     w.report.accepted = outcome_.accepted;
     w.report.learner_cost = outcome_.cost;
     w.report.status = outcome_.status;
@@ -482,6 +499,9 @@ void HopperController::TakeOfflineResult() {
 
 void HopperController::DeployLawWhenDue(double t) {
   if (!law_pending_ || job_.load(std::memory_order_acquire) != Job::kIdle || t < law_due_) return;
+  // A law changes only in flight: one that arrives in stance waits for the next hop, which then
+  // runs u^0 and is not learned from (EndHop).
+  if (mode() != hopper::kFlight) return;
   law_ = next_law_;
   law_->BeginTrial();
   law_pending_ = false;

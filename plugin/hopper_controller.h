@@ -60,6 +60,10 @@ struct ControllerConfig {
   /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
   /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;
+  /// true: the law takes effect max(offline_latency, the wall time its offline part took on this
+  /// computer) after the hop, and never outside a flight (a hop that ends first is not learned
+  /// from): offline_latency="measured". Default false. docs/design.md, "Honest latency".
+  bool measured_latency = false;
   /// true: the offline part runs on a worker thread (as on a robot); false: in RunOffline().
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
@@ -179,6 +183,8 @@ class HopperController {
   void StopWorker();
   void WriteHeld(const mjModel* m, mjData* d);
   void Sanitize();  // u_ finite and inside the bounds
+  // The offline part runs inside Compute at the hop's end (offline_latency 0, not measured).
+  bool Synchronous() const { return config_.offline_latency == 0.0 && !config_.measured_latency; }
 
   ControllerConfig config_;
   HopperMapping map_;
@@ -241,6 +247,8 @@ class HopperController {
   OnlineController* next_law_ = nullptr;  // the law the offline part chose
   bool law_pending_ = false;            // next_law_ takes effect at law_due_
   double law_due_ = 0.0;
+  double job_end_ = 0.0;                // simulated time of the handed-over hop's end, s
+  double offline_seconds_ = 0.0;        // wall time of the last offline part, s
   std::thread worker_;
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;

@@ -6,6 +6,8 @@
 // gives what the host gives when the host waits for it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -110,6 +112,104 @@ TEST(OfflinePartTest, WorkerThreadGivesTheHostsResultsWhenTheHostWaits) {
   const std::vector<HopReport> b = threaded.Run(7, Host::kWaitsForWorker);
   EXPECT_FALSE(threaded.c().offline_pending());  // the worker, not the host, runs it
   ExpectSameReports(a, b);
+}
+
+// offline_latency = "measured": the law never takes effect sooner than the offline part that
+// made it took on this computer.
+TEST(OfflinePartTest, AMeasuredLatencyIsNeverShorterThanTheOfflinePart) {
+  ControllerConfig config = LearningFromHop0(1e-4);  // far below any offline part's time
+  config.measured_latency = true;
+  Robot robot("hopper_m8.xml", config, false);
+  ASSERT_TRUE(robot.ok());
+  HopperController& c = robot.c();
+  while (c.hop() == 0) robot.Step(Host::kNothing);
+  const double t_end = robot.d()->time;
+  const auto start = std::chrono::steady_clock::now();
+  c.RunOffline();
+  const double host_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const std::vector<HopReport> reports = c.TakeReports();
+  ASSERT_EQ(reports.size(), 1u);
+  const double offline_ms = reports[0].offline_ms;
+  EXPECT_GT(offline_ms, 0.0);
+  EXPECT_LE(offline_ms, host_ms);
+  EXPECT_DOUBLE_EQ(reports[0].latency_ms, std::max(0.1, offline_ms));
+  double switched = -1, touchdown = -1;
+  while (switched < 0 && robot.d()->time < t_end + 2.0) {
+    robot.Step(Host::kRunsOffline);
+    if (touchdown < 0 && c.mode() == hopper::kStance) touchdown = robot.d()->time;
+    if (!c.runs_initial_law()) switched = robot.d()->time;
+  }
+  ASSERT_GT(switched, 0.0);
+  const double due = t_end + 1e-3 * reports[0].latency_ms;
+  EXPECT_GE(switched, due);
+  // In the flight where it is due, or (a slow computer) in the flight of the next hop.
+  if (touchdown < 0 || due < touchdown) EXPECT_LE(switched, due + 1.01e-3);
+  EXPECT_EQ(c.mode(), hopper::kFlight);
+}
+
+// A law that comes after a touchdown waits for the next flight; the hops that ran u^0 meanwhile
+// are reported but not learned from, and the hop in which the law takes effect is its trial.
+TEST(OfflinePartTest, ALawDueInStanceWaitsForTheNextFlight) {
+  ControllerConfig probe_config = LearningFromHop0(0.02);
+  Robot probe("hopper_m8.xml", probe_config, false);
+  ASSERT_TRUE(probe.ok());
+  const NominalGait& gait = probe.c().gait();
+  // Due in the middle of hop 2's stance (unless this computer's offline part is slower still).
+  ControllerConfig config = LearningFromHop0(gait.period + gait.T0(0) + 0.5 * gait.stance_time);
+  config.measured_latency = true;
+  Robot robot("hopper_m8.xml", config, false);
+  ASSERT_TRUE(robot.ok());
+  HopperController& c = robot.c();
+  std::vector<HopReport> reports;
+  double switched = -1;
+  int switched_hop = -1, switched_mode = -1;
+  while (c.hop() < 6 && robot.d()->time < 10.0) {
+    robot.Step(Host::kRunsOffline);
+    for (const HopReport& r : c.TakeReports()) reports.push_back(r);
+    if (switched < 0 && !c.runs_initial_law()) {
+      switched = robot.d()->time;
+      switched_hop = c.hop();
+      switched_mode = c.mode();
+    }
+  }
+  ASSERT_FALSE(c.failed()) << c.error();
+  ASSERT_GE(reports.size(), 5u);
+  ASSERT_TRUE(std::isfinite(reports[0].learner_cost));  // hop 0 initialized the learner
+  ASSERT_GT(switched, 0.0);
+  // The hop in which the law is due (its handover was hop 1's takeoff step).
+  const double due = reports[1].t_start + 1e-3 * reports[0].latency_ms;
+  int h = 1;
+  while (h + 1 < static_cast<int>(reports.size()) && reports[h + 1].t_start <= due) ++h;
+  ASSERT_LT(h + 1, static_cast<int>(reports.size()));
+  const bool in_stance = due >= reports[h].t_touchdown;
+  RecordProperty("due_in_stance", in_stance ? 1 : 0);
+  EXPECT_EQ(switched_mode, hopper::kFlight);
+  EXPECT_GE(switched, due);
+  if (in_stance) {  // at the next takeoff
+    EXPECT_EQ(switched_hop, h + 1);
+    EXPECT_NEAR(switched, reports[h + 1].t_start, 1.01e-3);
+  } else {
+    EXPECT_EQ(switched_hop, h);
+    EXPECT_NEAR(switched, due, 1.01e-3);
+  }
+  // Every hop before the law's trial ran u^0 and was not learned from; the trial was.
+  for (int i = 1; i < switched_hop; ++i) {
+    EXPECT_TRUE(std::isnan(reports[i].learner_cost)) << "hop " << i;
+    EXPECT_TRUE(std::isnan(reports[i].offline_ms)) << "hop " << i;
+  }
+  EXPECT_TRUE(std::isfinite(reports[switched_hop].learner_cost));
+}
+
+TEST(OfflinePartTest, AFixedLatencyIsReportedWithTheOfflineTime) {
+  Robot robot("hopper_m8.xml", LearningFromHop0(0.02), false);
+  ASSERT_TRUE(robot.ok());
+  const std::vector<HopReport> reports = robot.Run(2, Host::kRunsOffline);
+  ASSERT_EQ(reports.size(), 2u);
+  for (const HopReport& r : reports) {
+    EXPECT_GT(r.offline_ms, 0.0);
+    EXPECT_DOUBLE_EQ(r.latency_ms, 20.0);
+  }
 }
 
 }  // namespace
