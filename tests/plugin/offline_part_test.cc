@@ -164,7 +164,7 @@ TEST(OfflinePartTest, ALawDueInStanceWaitsForTheNextFlight) {
   std::vector<HopReport> reports;
   double switched = -1;
   int switched_hop = -1, switched_mode = -1;
-  while (c.hop() < 6 && robot.d()->time < 10.0) {
+  while (reports.size() < 5 && robot.d()->time < 10.0) {
     robot.Step(Host::kRunsOffline);
     for (const HopReport& r : c.TakeReports()) reports.push_back(r);
     if (switched < 0 && !c.runs_initial_law()) {
