@@ -264,7 +264,15 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
       }
       if (!reports.empty() && !progress.is_none()) {
         py::gil_scoped_acquire gil;
-        for (const HopReport& h : reports) progress(HopDict(h));  // raises: propagates
+        try {
+          for (const HopReport& h : reports) progress(HopDict(h));
+        } catch (py::error_already_set& e) {
+          // Python runs its SIGINT handler in the next Python code, here the callback: a
+          // KeyboardInterrupt from it is a Ctrl-C, which keeps the hops done (their rows are in
+          // the table already); any other exception propagates.
+          if (!e.matches(PyExc_KeyboardInterrupt)) throw;
+          interrupted = true;
+        }
       }
       capture();
       if (outcome.kind == app::StepOutcome::Kind::kFell) {
@@ -272,6 +280,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
         fall_reason = outcome.reason;
         break;
       }
+      if (interrupted) break;
       if (step % 2000 == 0) {
         py::gil_scoped_acquire gil;
         if (PyErr_CheckSignals() != 0) {
@@ -361,7 +370,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   offline_latency  s (--offline-latency)
   log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
   progress         called after every hop with that hop's row (a dict of the table's columns);
-                   an exception raised in it ends the run and propagates
+                   an exception raised in it ends the run and propagates, but a
+                   KeyboardInterrupt (Ctrl-C while it runs) is a Ctrl-C: SolveInterrupted
   render_dir, width, height, fps  PNG frames, as --render/--width/--height/--fps (only when
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
