@@ -99,35 +99,45 @@ def _cache_value(build_dir, name):
     return ""
 
 
-def _build_and_stage(build_dir, cmake_args, prefix):
-    """Configures (if needed) and builds `build_dir`, installs the component into `prefix`;
-    returns the package directory below the prefix."""
-    if not os.path.exists(os.path.join(build_dir, "CMakeCache.txt")):
-        _run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
-              f"-DPython_EXECUTABLE={sys.executable}", f"-DDDOC_PYTHON_INSTALL_DIR={_site_dir()}",
-              "-DDDOC_BUILD_TESTS=OFF", "-DDDOC_BUILD_BENCH=OFF"] + shlex.split(cmake_args),
-             "configuring with CMake")
-    if _cache_value(build_dir, "DDOC_PYTHON_MODULE_BUILT") == "OFF":
-        raise BuildError(f"{build_dir}: CMake found no pybind11 or Python headers for "
-                         f"{sys.executable}, so it builds no Python module (apt-get install "
-                         "python3-dev pybind11-dev)")
-    parallel = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL") or str(os.cpu_count() or 1)
-    _run(["cmake", "--build", build_dir, "--target", TARGET, "--parallel", parallel], "building")
-    _run(["cmake", "--install", build_dir, "--prefix", prefix, "--component", COMPONENT],
-         "cmake --install")
+def _check_build_dir(build_dir):
+    """The tree builds the module for this Python, with the package as deep below the prefix as
+    this Python's site-packages; checked before building (the cache has the answers)."""
+    suffix = _cache_value(build_dir, "PYTHON_MODULE_EXTENSION")
+    if not suffix:
+        raise BuildError(f"{build_dir} builds no Python module (DDOC_BUILD_PYTHON is off, or CMake "
+                         "found no pybind11 or Python headers: apt-get install python3-dev "
+                         "pybind11-dev python3-pybind11)")
+    if suffix != sysconfig.get_config_var("EXT_SUFFIX"):
+        built = _cache_value(build_dir, "_Python_EXECUTABLE") or "another Python"
+        raise BuildError(f"{build_dir} builds the module for {built} (_ddoc{suffix}), not for "
+                         f"{sys.executable} (_ddoc{sysconfig.get_config_var('EXT_SUFFIX')}); use "
+                         "another build dir, or reconfigure this one with "
+                         f"-DPython_EXECUTABLE={sys.executable}")
     package_dir = _cache_value(build_dir, "DDOC_PYTHON_INSTALL_DIR")
-    depth = len(os.path.normpath(package_dir).split(os.sep))
-    if depth != len(os.path.normpath(_site_dir()).split(os.sep)):
+    if len(os.path.normpath(package_dir).split(os.sep)) != len(_site_dir().split(os.sep)):
         raise BuildError(
             f"{build_dir}: DDOC_PYTHON_INSTALL_DIR is {package_dir!r}, not as deep below the "
             f"prefix as this Python's {_site_dir()!r}, so the installed package would not find "
             f"ddoc-hopper and its library; reconfigure with -DDDOC_PYTHON_INSTALL_DIR={_site_dir()}")
-    module = os.path.join(prefix, package_dir, NAME, "_ddoc" + sysconfig.get_config_var("EXT_SUFFIX"))
-    if not os.path.exists(module):
-        built = _cache_value(build_dir, "Python_EXECUTABLE")
-        raise BuildError(f"{build_dir} builds the module for {built}, not for {sys.executable} "
-                         f"(no {os.path.basename(module)}); use another build dir or reconfigure "
-                         f"it with -DPython_EXECUTABLE={sys.executable}")
+    return package_dir
+
+
+def _build_and_stage(build_dir, cmake_args, prefix):
+    """Configures (if needed) and builds `build_dir`, installs the component into `prefix`;
+    returns the package directory below the prefix."""
+    if not os.path.exists(os.path.join(build_dir, "CMakeCache.txt")):
+        if os.path.exists(build_dir) and (not os.path.isdir(build_dir) or os.listdir(build_dir)):
+            raise BuildError(f"build dir {build_dir} is neither a CMake build tree (no "
+                             "CMakeCache.txt) nor an empty directory to configure one in")
+        _run(["cmake", "-S", ROOT, "-B", build_dir, "-DCMAKE_BUILD_TYPE=Release",
+              f"-DPython_EXECUTABLE={sys.executable}", f"-DDDOC_PYTHON_INSTALL_DIR={_site_dir()}",
+              "-DDDOC_BUILD_TESTS=OFF", "-DDDOC_BUILD_BENCH=OFF"] + shlex.split(cmake_args),
+             "configuring with CMake")
+    package_dir = _check_build_dir(build_dir)
+    parallel = os.environ.get("CMAKE_BUILD_PARALLEL_LEVEL") or str(os.cpu_count() or 1)
+    _run(["cmake", "--build", build_dir, "--target", TARGET, "--parallel", parallel], "building")
+    _run(["cmake", "--install", build_dir, "--prefix", prefix, "--component", COMPONENT],
+         "cmake --install")
     return package_dir
 
 
