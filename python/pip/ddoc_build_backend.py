@@ -14,7 +14,8 @@ Settings (pip's --config-settings KEY=VALUE, or the environment variable):
   build-dir   DDOC_CMAKE_BUILD_DIR  a CMake build tree to build and install from, kept; configured
                                     there first when it has no CMakeCache.txt. Unset: a temporary
                                     tree, configured from scratch and removed afterwards.
-  cmake-args  DDOC_CMAKE_ARGS       extra configure arguments (e.g. -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  cmake-args  DDOC_CMAKE_ARGS       extra configure arguments
+                                    (e.g. -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 """
 import base64
 import hashlib
@@ -42,7 +43,8 @@ def _version():
     with open(os.path.join(ROOT, "CMakeLists.txt"), encoding="utf-8") as f:
         match = re.search(r"project\(\s*ddoc\s+VERSION\s+([0-9.]+)", f.read())
     if not match:
-        raise BuildError("CMakeLists.txt: no `project(ddoc VERSION x.y.z)` to take the version from")
+        raise BuildError("CMakeLists.txt: no `project(ddoc VERSION x.y.z)` to take the version "
+                         "from")
     return match.group(1)
 
 
@@ -118,7 +120,8 @@ def _check_build_dir(build_dir):
         raise BuildError(
             f"{build_dir}: DDOC_PYTHON_INSTALL_DIR is {package_dir!r}, not as deep below the "
             f"prefix as this Python's {_site_dir()!r}, so the installed package would not find "
-            f"ddoc-hopper and its library; reconfigure with -DDDOC_PYTHON_INSTALL_DIR={_site_dir()}")
+            "ddoc-hopper and its library; reconfigure with "
+            f"-DDDOC_PYTHON_INSTALL_DIR={_site_dir()}")
     return package_dir
 
 
