@@ -13,10 +13,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <mujoco/mujoco.h>
@@ -161,12 +163,50 @@ class ScopedMujocoWarnings {
   void (*previous_)(const char*);
 };
 
+std::string Repr(double x) { return std::string(py::repr(py::float_(x))); }
+
+// run_hopper's keywords that are ddoc-hopper's flags, checked with the rules of LoadRun
+// (ScenarioWithOverrides) before it, so that a message names the Python argument (`hops must be
+// >= 0`), not the flag (`--hops must be >= 0`).
+void CheckOverrides(const app::RunOverrides& o) {
+  if (!o.method.empty() && o.method != "alg1" && o.method != "ocfb" && o.method != "mrl") {
+    throw py::value_error("method \"" + o.method + "\": expected alg1, ocfb or mrl");
+  }
+  if (!o.preset.empty() && o.preset != "default" && o.preset != "paper") {
+    throw py::value_error("preset \"" + o.preset + "\": expected default or paper");
+  }
+  if (o.hops && *o.hops < 0) {
+    throw py::value_error("hops must be >= 0, got " + std::to_string(*o.hops));
+  }
+  if (o.seconds && !(*o.seconds >= 0 && std::isfinite(*o.seconds))) {
+    throw py::value_error("seconds must be a finite number >= 0, got " + Repr(*o.seconds));
+  }
+  if (o.offline_latency && !(*o.offline_latency >= 0 && std::isfinite(*o.offline_latency))) {
+    throw py::value_error("offline_latency must be a finite number >= 0 (s), got " +
+                          Repr(*o.offline_latency));
+  }
+  // As --robot and --model-mjcf, relative to the working directory (ValidateScenario checks them
+  // too, but names the scenario file, which did not give them).
+  for (const auto& [name, path] : {std::pair{"robot", &o.robot}, {"model_mjcf", &o.model_mjcf}}) {
+    std::error_code ec;
+    if (!path->empty() && !std::filesystem::is_regular_file(*path, ec)) {
+      throw py::value_error(std::string(name) + " \"" + *path + "\": no such file");
+    }
+  }
+}
+
 app::LoadedRun Load(const std::string& scenario, const app::RunOverrides& overrides) {
+  CheckOverrides(overrides);
   try {
     return app::LoadRun(scenario, overrides);
   } catch (const app::RunError& e) {
-    if (e.code() == app::kExitBadInput) throw py::value_error(e.what());
-    throw std::runtime_error(e.what());
+    std::string message = e.what();
+    // The controller's check of the upper bound names its config field: name the argument too.
+    if (overrides.offline_latency && message.find("config.offline_latency") != std::string::npos) {
+      message = "offline_latency: " + message;
+    }
+    if (e.code() == app::kExitBadInput) throw py::value_error(message);
+    throw std::runtime_error(message);
   }
 }
 
@@ -214,7 +254,12 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
         app::RunFrames::Settings{render_dir, width, height, fps}, run.model.get(), method_name,
         "render_dir");
   } catch (const app::RunError& e) {
-    throw py::value_error(e.what());
+    // RenderSettings' messages name width, height and fps; the rest is about the directory.
+    std::string message = e.what();
+    if (message.rfind("render: ", 0) == 0) message.erase(0, 8);
+    const bool named = message.rfind("width", 0) == 0 || message.rfind("height", 0) == 0 ||
+                       message.rfind("fps", 0) == 0 || message.rfind("render_dir", 0) == 0;
+    throw py::value_error(named ? message : "render_dir: " + message);
   }
 
   std::vector<std::vector<double>> hop_table(kNumHopColumns), trajectory(kNumTrajectoryColumns);
@@ -264,7 +309,15 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
       }
       if (!reports.empty() && !progress.is_none()) {
         py::gil_scoped_acquire gil;
-        for (const HopReport& h : reports) progress(HopDict(h));  // raises: propagates
+        try {
+          for (const HopReport& h : reports) progress(HopDict(h));
+        } catch (py::error_already_set& e) {
+          // Python runs its SIGINT handler in the next Python code, here the callback: a
+          // KeyboardInterrupt from it is a Ctrl-C, which keeps the hops done (their rows are in
+          // the table already); any other exception propagates.
+          if (!e.matches(PyExc_KeyboardInterrupt)) throw;
+          interrupted = true;
+        }
       }
       capture();
       if (outcome.kind == app::StepOutcome::Kind::kFell) {
@@ -272,6 +325,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
         fall_reason = outcome.reason;
         break;
       }
+      if (interrupted) break;
       if (step % 2000 == 0) {
         py::gil_scoped_acquire gil;
         if (PyErr_CheckSignals() != 0) {
@@ -361,7 +415,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   offline_latency  s (--offline-latency)
   log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
   progress         called after every hop with that hop's row (a dict of the table's columns);
-                   an exception raised in it ends the run and propagates
+                   an exception raised in it ends the run and propagates, but a
+                   KeyboardInterrupt (Ctrl-C while it runs) is a Ctrl-C: SolveInterrupted
   render_dir, width, height, fps  PNG frames, as --render/--width/--height/--fps (only when
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)

@@ -11,7 +11,7 @@ packages=(
   libeigen3-dev libmujoco-dev libosmesa6-dev libtinyxml2-dev liblodepng-dev libcli11-dev
   libbenchmark-dev libgtest-dev googletest zlib1g-dev nlohmann-json3-dev
   ffmpeg python3-matplotlib
-  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-venv python3-pip
   clang libclang-rt-14-dev
 )
 export DEBIAN_FRONTEND=noninteractive
