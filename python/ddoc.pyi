@@ -229,7 +229,7 @@ Push = Union[str, Tuple[float, float, float], Tuple[int, float, float, float]]
 def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
                seconds: Optional[float] = None, robot: str = "", model_mjcf: str = "",
                pushes: Sequence[Push] = ..., no_pushes: bool = False, preset: str = "",
-               offline_latency: Optional[float] = None, log_every: int = 1,
+               offline_latency: Union[float, str, None] = None, log_every: int = 1,
                progress: Optional[Callable[[Dict[str, Any]], None]] = None,
                render_dir: str = "", width: int = 640, height: int = 480,
                fps: float = 60.0, law_cache: str = "") -> Dict[str, Any]:

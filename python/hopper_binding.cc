@@ -66,6 +66,8 @@ const HopColumn kHopColumns[] = {
     {"predicted", false, [](const HopReport& h) { return h.predicted; }},
     {"optimality", false, [](const HopReport& h) { return h.optimality; }},
     {"stance_mass", false, [](const HopReport& h) { return h.stance_mass; }},
+    {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
+    {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 
@@ -226,7 +228,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    std::optional<int> hops, std::optional<double> seconds,
                    const std::string& robot, const std::string& model_mjcf,
                    const py::iterable& pushes, bool no_pushes, const std::string& preset,
-                   std::optional<double> offline_latency, int log_every,
+                   const py::object& offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
                    int height, double fps, const std::string& law_cache) {
   app::RunOverrides overrides;
@@ -239,7 +241,21 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   for (const py::handle item : pushes) overrides.pushes.push_back(PushText(item, index++));
   overrides.no_pushes = no_pushes;
   overrides.preset = preset;
-  overrides.offline_latency = offline_latency;
+  // A number of s, or "measured" (ControllerConfig::measured_latency).
+  if (py::isinstance<py::str>(offline_latency)) {
+    const std::string text = offline_latency.cast<std::string>();
+    if (text != "measured") {
+      throw py::value_error("offline_latency \"" + text + "\": expected a number of s or \"measured\"");
+    }
+    overrides.measured_latency = true;
+  } else if (!offline_latency.is_none()) {
+    try {
+      overrides.offline_latency = offline_latency.cast<double>();
+    } catch (const py::cast_error&) {
+      throw py::value_error("offline_latency: expected a number of s or \"measured\", got " +
+                            py::repr(offline_latency).cast<std::string>());
+    }
+  }
   overrides.law_cache = law_cache;
   if (log_every < 0) throw py::value_error("log_every must be >= 0, got " + std::to_string(log_every));
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) {
@@ -412,7 +428,7 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    string 'TIME,FORCE,DURATION' / 'HOP@PHASE,FORCE,DURATION'
   no_pushes        drop the scenario's pushes (--no-pushes)
   preset           "default" | "paper" (--preset)
-  offline_latency  s (--offline-latency)
+  offline_latency  s, or "measured": max(0.02 s, this computer's offline time) (--offline-latency)
   log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
   progress         called after every hop with that hop's row (a dict of the table's columns);
                    an exception raised in it ends the run and propagates, but a
@@ -423,8 +439,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
-learner_cost, nominal_cost, predicted, optimality, stance_mass); 'trajectory', a
-dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
+learner_cost, nominal_cost, predicted, optimality, stance_mass) and offline_ms, latency_ms (the
+wall time of the hop's offline part and the simulated latency of its law); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written) and initial_law (where u^0 came from, as summary.json's
 initial_law). ddoc.to_dataframe turns either table into a pandas

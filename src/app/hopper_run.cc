@@ -124,9 +124,24 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--preset", preset,
                   "default | paper: the learner and the hopper's reading (overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
-  cli->add_option("--offline-latency", offline_latency,
-                  "simulated s from a hop's end until the law learned from it takes effect "
-                  "(default 0.02; 0: learn inside the control callback, synchronously)");
+  cli->add_option_function<std::string>(
+         "--offline-latency",
+         [this](const std::string& text) {
+           if (text == "measured") {
+             measured_latency = true;
+             return;
+           }
+           double s = 0;
+           if (!ParseFiniteNumber(text, &s)) {
+             throw CLI::ValidationError("--offline-latency",
+                                        "\"" + text + "\" is neither a number of s nor measured");
+           }
+           offline_latency = s;
+         },
+         "simulated s from a hop's end until the law learned from it takes effect (default "
+         "0.02; 0: learn inside the control callback, synchronously), or measured: max(0.02, "
+         "the wall time of the hop's offline part on this computer)")
+      ->type_name("S|measured");
   cli->add_option("--law-cache", law_cache,
                   "directory of stored initial laws u^0: load u^0 when the model solve's inputs "
                   "and binaries match, else solve and store it (default: $DDOC_LAW_CACHE, unset: "
@@ -203,6 +218,7 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
     throw RunError(kExitBadInput, e.what());
   }
   if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
+  if (overrides.measured_latency) run.config.measured_latency = true;
   run.config.law_cache = overrides.law_cache;
   if (run.config.law_cache.empty()) {
     const char* env = std::getenv("DDOC_LAW_CACHE");

@@ -76,6 +76,8 @@ struct RunOverrides {
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
+  /// --offline-latency measured: ControllerConfig::measured_latency (the floor stays 0.02 s).
+  bool measured_latency = false;
   std::string preset;                    ///< --preset default | paper (overrides the scenario)
   /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE.
   std::string law_cache;

@@ -166,6 +166,7 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
   summary_.robot = s.robot_mjcf;
   summary_.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
   summary_.offline_latency_s = run->config.offline_latency;
+  summary_.offline_latency_measured = run->config.measured_latency;
   summary_.initial_law = run->controller->law_cache_status();
   // A law cache that could not be written, or held a file it could not use, is worth a line.
   if (run->controller->law_cache_trouble()) {
@@ -363,6 +364,12 @@ int HopperRun::Finish(int exit_code) {
   }
   log_->FlushQuietly();
   exit_code = frames_->Finish(o_, exit_code);
+  if (summary_.late_hops > 0) {  // the result assumes a faster offline computer than this one
+    std::fprintf(stderr,
+                 "ddoc-hopper: the offline part took longer than the simulated latency (%g s) on "
+                 "%d hops (longest %.0f ms): --offline-latency measured simulates this computer\n",
+                 summary_.offline_latency_s, summary_.late_hops, summary_.offline_max_ms);
+  }
   char cost[48] = "";
   if (summary_.hops > 0) std::snprintf(cost, sizeof(cost), ", final cost %.4g", summary_.final_cost);
   std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s%s, wrote %s\n", summary_.scenario.c_str(),

@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "run_log.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -48,6 +49,16 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   if (std::isfinite(h.stance_mass)) {
     stance_mass_sum_ += h.stance_mass;
     mean_stance_mass = stance_mass_sum_ / ++stance_mass_hops_;
+  }
+  if (std::isfinite(h.offline_ms)) {
+    offline_ms_.push_back(h.offline_ms);
+    offline_max_ms = std::max(std::isnan(offline_max_ms) ? 0.0 : offline_max_ms, h.offline_ms);
+    std::vector<double> sorted = offline_ms_;
+    const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+    std::nth_element(sorted.begin(), mid, sorted.end());
+    offline_median_ms = *mid;
+    // A law that this computer made later than the simulated latency (a fixed offline_latency).
+    if (std::isfinite(h.latency_ms) && h.offline_ms > h.latency_ms) ++late_hops;
   }
 }
 
@@ -132,6 +143,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["robot"] = s.robot;
   j["model"] = s.model;
   j["offline_latency_s"] = s.offline_latency_s;
+  j["offline_latency_measured"] = s.offline_latency_measured;
   j["initial_law"] = s.initial_law;
   j["hops"] = s.hops;
   j["fell"] = s.fell;
@@ -150,6 +162,9 @@ void RunLog::WriteSummary(const Summary& s) {
   j["rejected"] = s.rejected;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;
+  j["offline_timing"] = {{"max_ms", s.offline_max_ms},
+                         {"median_ms", s.offline_median_ms},
+                         {"late_hops", s.late_hops}};
   j["end"] = s.end;
   j["end_message"] = s.end_message;
   j["pushes"] = nlohmann::json::array();

@@ -46,6 +46,11 @@ struct EventRecord {
 struct Summary {
   std::string scenario, method, robot, model;
   double offline_latency_s = 0.0;  // ControllerConfig::offline_latency of the run
+  bool offline_latency_measured = false;  // ControllerConfig::measured_latency of the run
+  // Wall-clock figures of the offline part (summary.json "offline_timing"; not deterministic):
+  // its longest and median hop, and the hops whose law it made later than the simulated latency.
+  double offline_max_ms = std::nan(""), offline_median_ms = std::nan("");
+  int late_hops = 0;
   std::string initial_law;         // HopperController::law_cache_status()
   int hops = 0;
   bool fell = false;
@@ -74,6 +79,7 @@ struct Summary {
 
  private:
   double speed_sum_ = 0.0, period_sum_ = 0.0, stance_mass_sum_ = 0.0;
+  std::vector<double> offline_ms_;  // per hop handed to the offline part
   int stance_mass_hops_ = 0;
 };
 

@@ -111,6 +111,7 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --hops 1e12", "--hops"},
       {good + " --log-every 0", "--log-every must be >= 1"},
       {good + " --offline-latency -1", "offline_latency"},
+      {good + " --offline-latency soon", "\"soon\" is neither a number of s nor measured"},
       {Out("fast.xml"), "no periodic gait at 5 m/s"},
       {Out("stiff.xml"), "scenario <model>: the model (M = 10, J_body = 2.5, J_leg = 1e-06"},
   };
@@ -276,6 +277,34 @@ TEST_F(CliTest, ARunWithoutACompleteHopHasNoCost) {
                             "mean_stance_mass"}) {
     EXPECT_NE(summary.find(std::string("\"") + field + "\": null"), std::string::npos)
         << field << ": " << summary;
+  }
+}
+
+// summary.json says whether the run's latency was measured, and how long the offline part took
+// (wall time: "offline_timing"); a run whose offline part was later than the fixed latency on some
+// hop says so on its last lines.
+TEST_F(CliTest, TheSummaryRecordsTheOfflinePartsTime) {
+  for (const bool measured : {false, true}) {
+    SCOPED_TRACE(measured ? "measured" : "fixed");
+    const std::string out = Out(measured ? "measured" : "fixed");
+    const Result r = RunCli(Scenario("default.xml") + " --hops 5 -q --out " + out +
+                            (measured ? " --offline-latency measured" : ""));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string summary = ReadFile(fs::path(out) / "summary.json");
+    EXPECT_NE(summary.find(std::string("\"offline_latency_measured\": ") +
+                           (measured ? "true" : "false")),
+              std::string::npos)
+        << summary;
+    const size_t max_at = summary.find("\"max_ms\": ");
+    ASSERT_NE(max_at, std::string::npos) << summary;
+    EXPECT_GT(std::stod(summary.substr(max_at + 10)), 0.0) << summary;
+    const size_t late_at = summary.find("\"late_hops\": ");
+    ASSERT_NE(late_at, std::string::npos) << summary;
+    const int late = std::stoi(summary.substr(late_at + 13));
+    if (measured) EXPECT_EQ(late, 0);  // never later than this computer
+    EXPECT_EQ(r.output.find("took longer than the simulated latency") != std::string::npos,
+              late > 0)
+        << r.output;
   }
 }
 

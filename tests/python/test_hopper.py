@@ -203,3 +203,22 @@ def test_run_hopper_non_finite_state_raises_run_failed(tmp_path, monkeypatch):
     # sim_time is the last finite state's (the message's t), not the reset's 0.0005 s.
     assert table["t_end"][-1] <= 1.5 and table["sim_time"] == pytest.approx(1.5005, abs=1e-9)
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_run_hopper_measured_latency():
+    # offline_latency="measured": a law never takes effect sooner than its offline part took on
+    # this computer, and never sooner than the 0.02 s floor; the fixed default reports its offline
+    # times too.
+    table = ddoc.run_hopper(SCENARIO, hops=5, offline_latency="measured", log_every=0)
+    offline, latency = table["offline_ms"], table["latency_ms"]
+    learned = np.isfinite(latency)
+    assert learned.any()
+    assert np.all(latency[learned] >= offline[learned])
+    assert np.all(latency[learned] >= 20.0)
+    fixed = ddoc.run_hopper(SCENARIO, hops=5, log_every=0)
+    assert np.all(fixed["latency_ms"][np.isfinite(fixed["latency_ms"])] == 20.0)
+    assert np.nanmax(fixed["offline_ms"]) > 0
+    with pytest.raises(ValueError, match=r'offline_latency "soon": expected a number of s or "measured"'):
+        ddoc.run_hopper(SCENARIO, hops=1, offline_latency="soon")
+    with pytest.raises(ValueError, match=r"^offline_latency: expected a number of s"):
+        ddoc.run_hopper(SCENARIO, hops=1, offline_latency=[1])

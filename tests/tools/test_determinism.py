@@ -1,6 +1,6 @@
 """Determinism (issue 20): the same scenario run twice by the real ddoc-hopper (DDOC_HOPPER, set by
 CMake) gives byte-identical hops.csv, events.csv and trajectory.csv, and summary.json identical but
-for wall_time_s; tools/mass_sweep and tools/push_sweep give the same rows (and the same logs per
+for wall_time_s and offline_timing; tools/mass_sweep and tools/push_sweep give the same rows (and the same logs per
 case) whatever --jobs."""
 import filecmp
 import json
@@ -15,13 +15,14 @@ LOGS = ("hops.csv", "events.csv", "trajectory.csv")
 
 
 def summary_without_wall_time(run_dir, out=None):
-    """summary.json without wall_time_s; paths under `out` (a sweep's --out) start with OUT."""
+    """summary.json without wall_time_s and offline_timing; paths under `out` (a sweep's --out) start with OUT."""
     with open(os.path.join(run_dir, "summary.json")) as f:
         text = f.read()
     if out:
         text = text.replace(json.dumps(out)[1:-1], "OUT")
     summary = json.loads(text)
     del summary["wall_time_s"]
+    del summary["offline_timing"]  # wall time of the offline part
     return summary
 
 
