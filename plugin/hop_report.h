@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 
 #include "ddoc/hopper/hopper_cost.h"
+#include "ddoc/hopper/identification.h"
 #include "ddoc/learner.h"
 
 namespace ddoc::plugin {
@@ -38,6 +39,8 @@ struct HopReport {
   /// The robot's mass from the hop's stance (docs/hopper.md, "The mass from a stance"), kg: the
   /// floor's vertical impulse / (yd(takeoff) - yd(touchdown) + g T_stance). NaN: no stance.
   double stance_mass = std::numeric_limits<double>::quiet_NaN();
+  /// The stance's balance for MassIdentification (docs/hopper.md, "Identifying the mass").
+  HopIdentificationData identification;
   // From the trial driver (TrialOutcome):
   bool accepted = false;        ///< (36) held (true for trials it does not judge)
   double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)

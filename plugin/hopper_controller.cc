@@ -401,7 +401,11 @@ void HopperController::EndHop(double t) {
   const double stance_time = t - r.t_touchdown;
   const double dyd =
       r.body_takeoff(3) - r.body_touchdown(3) - robot_model_->opt.gravity[2] * stance_time;
-  if (stance_time > 0 && dyd > 0) r.stance_mass = stance_impulse_ / dyd;
+  if (stance_time > 0 && dyd > 0) {
+    r.stance_mass = stance_impulse_ / dyd;
+    r.identification.stance_impulse = stance_impulse_;
+    r.identification.stance_velocity = dyd;
+  }
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
   // thread only) or the law it learned has not taken effect yet (measured_latency): then this

@@ -283,6 +283,30 @@ TEST(HopperControllerTest, EachStanceGivesTheMassAboveTheLegSpring) {
   }
 }
 
+// The hops' stance balances (HopReport::identification) determine the robot's mass within 1 %
+// after 3 hops, and the 10 kg model is left exactly on the robots it does not match
+// (MassIdentification::LeavesModel).
+TEST(HopperControllerTest, ThreeHopsIdentifyTheMass) {
+  for (const char* mjcf : {"hopper_m8.xml", "hopper_m12.xml", "hopper.xml"}) {
+    SCOPED_TRACE(mjcf);
+    Robot rig(mjcf, ControllerConfig(), false);
+    ASSERT_TRUE(rig.ok());
+    const double sprung = rig.m()->body_mass[rig.c().mapping().body_torso] +
+                          rig.m()->body_mass[rig.c().mapping().body_leg];
+    const std::vector<HopReport> reports = rig.Run(3, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 3u);
+    MassIdentification id;
+    for (const HopReport& r : reports) id.Add(r.identification);
+    const MassIdentification::Estimate e = id.estimate();
+    EXPECT_EQ(e.hops, 3);
+    EXPECT_EQ(e.rejected, 0);
+    EXPECT_NEAR(e.mass, sprung, 0.01 * sprung);
+    EXPECT_LT(e.mass_se, 1e-3 * sprung);
+    EXPECT_EQ(id.LeavesModel(10.0), std::abs(sprung - 10.0) > 0.1);
+    EXPECT_FALSE(id.LeavesModel(sprung));
+  }
+}
+
 TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // Algorithm 1 with the paper's inexact model (10 kg, no drag) on the 8 kg robot with drag, on
   // the paper's reading of the hop (I1 against the hop's own start, terminal cost at T_K, no
