@@ -237,11 +237,12 @@ std::unique_ptr<VideoStream> VideoStream::Start(const std::string& mp4_path, int
           std::strerror(errno);
     return nullptr;
   }
-  v->log_path_ = log_template;
+  unlink(log_template);  // read through the descriptor: nothing is left behind, whatever ends us
+  v->log_fd_ = log_fd;
+  fcntl(log_fd, F_SETFD, FD_CLOEXEC);  // the child gets it through dup2 only
   int pipe_fds[2];
   if (pipe(pipe_fds) != 0) {
     msg = std::string("video: pipe: ") + std::strerror(errno);
-    close(log_fd);
     return nullptr;
   }
   std::vector<char*> argv;
@@ -250,7 +251,6 @@ std::unique_ptr<VideoStream> VideoStream::Start(const std::string& mp4_path, int
   const pid_t pid = fork();
   if (pid < 0) {
     msg = std::string("video: fork: ") + std::strerror(errno);
-    close(log_fd);
     close(pipe_fds[0]);
     close(pipe_fds[1]);
     return nullptr;
@@ -264,14 +264,12 @@ std::unique_ptr<VideoStream> VideoStream::Start(const std::string& mp4_path, int
     dup2(log_fd, STDERR_FILENO);
     close(pipe_fds[0]);
     close(pipe_fds[1]);
-    close(log_fd);
     execv(argv[0], argv.data());
     static const char kExecFailed[] = "execv failed\n";
     (void)!write(STDERR_FILENO, kExecFailed, sizeof(kExecFailed) - 1);
     _exit(127);
   }
   close(pipe_fds[0]);
-  close(log_fd);
   fcntl(pipe_fds[1], F_SETFD, FD_CLOEXEC);
   std::signal(SIGPIPE, SIG_IGN);
   v->fd_ = pipe_fds[1];
@@ -287,17 +285,18 @@ VideoStream::~VideoStream() {
     while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
     }
   }
-  if (!log_path_.empty()) unlink(log_path_.c_str());
+  if (log_fd_ >= 0) close(log_fd_);
 }
 
 std::string VideoStream::FfmpegOutput() const {
-  std::FILE* f = std::fopen(log_path_.c_str(), "r");
-  if (f == nullptr) return "";
   std::string text;
   char buffer[4096];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) text.append(buffer, n);
-  std::fclose(f);
+  off_t at = 0;
+  ssize_t n;
+  while (log_fd_ >= 0 && (n = pread(log_fd_, buffer, sizeof(buffer), at)) > 0) {
+    text.append(buffer, static_cast<size_t>(n));
+    at += n;
+  }
   return Tail(text, 3);
 }
 

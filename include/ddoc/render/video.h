@@ -35,8 +35,8 @@ bool AssembleVideo(const std::string& frames_dir, double fps, const std::string&
 ///   ffmpeg -y -loglevel error -f rawvideo -pix_fmt rgb24 -s WxH -framerate FPS -i -
 ///          -vf pad=ceil(iw/2)*2:ceil(ih/2)*2 -c:v libx264 -preset veryfast -pix_fmt yuv420p MP4
 /// (-c:v mpeg4 -q:v 3 when that ffmpeg has no libx264, found by `ffmpeg -h encoder=libx264`).
-/// ffmpeg runs as a child process (fork/execv, no shell); its messages go to a temporary file
-/// and appear in the error of WriteFrame or Finish. SIGPIPE is ignored once a stream starts (a
+/// ffmpeg runs as a child process (fork/execv, no shell); its messages go to an unlinked
+/// temporary file and appear in the error of WriteFrame or Finish. SIGPIPE is ignored once a stream starts (a
 /// dead ffmpeg makes WriteFrame fail instead of killing the process).
 class VideoStream {
  public:
@@ -65,7 +65,8 @@ class VideoStream {
   VideoStream() = default;
   std::string FfmpegOutput() const;  // the last lines of ffmpeg's messages
 
-  std::string path_, encoder_, log_path_;
+  std::string path_, encoder_;
+  int log_fd_ = -1;  // ffmpeg's stdout and stderr: an unlinked temporary file
   int width_ = 0, height_ = 0;
   double fps_ = 0;
   int fd_ = -1;     // write end of ffmpeg's stdin
