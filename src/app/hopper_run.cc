@@ -8,7 +8,10 @@
 #include <cstdlib>
 #include <cstdio>
 
+#include <unistd.h>
+
 #include "mujoco_warnings.h"
+#include "robot_variant.h"
 
 #ifdef DDOC_HAVE_RENDER
 #include "ddoc/render/frame_recorder.h"
@@ -142,21 +145,58 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
          "0.02; 0: learn inside the control callback, synchronously), or measured: max(0.02, "
          "the wall time of the hop's offline part on this computer)")
       ->type_name("S|measured");
-  cli->add_option("--law-cache", law_cache,
-                  "directory of stored initial laws u^0: load u^0 when the model solve's inputs "
-                  "and binaries match, else solve and store it (default: $DDOC_LAW_CACHE, unset: "
-                  "always solve)");
+  user_law_cache = true;
+  CLI::Option* dir = cli->add_option(
+      "--law-cache", law_cache,
+      "directory of stored initial laws u^0: load u^0 when the model solve's inputs and binaries "
+      "match, else solve and store it (default: $DDOC_LAW_CACHE, set and empty: off; unset: "
+      "$XDG_CACHE_HOME/ddoc or ~/.cache/ddoc)");
+  cli->add_flag("--no-law-cache", no_law_cache,
+                "always solve u^0 on the model (about 11 s); nothing is read or stored")
+      ->excludes(dir);
   if (!full) return;
   cli->add_option("--hops", hops, "number of hops (overrides the scenario)");
   cli->add_option("--seconds", seconds, "simulated seconds (overrides the scenario)");
   cli->add_option("--robot", robot, "robot MJCF (overrides the scenario)");
+  cli->add_option("--robot-variant", robot_variant,
+                  "the robot's numbers: KEY=VALUE,... with mass (torso, kg), j_body (kg m^2), c_d "
+                  "(drag, kg/m), beta (VSA bandwidth, rad/s), e.g. mass=11,c_d=0.02");
   cli->add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
   cli->add_option("--push", pushes,
                   "extra push TIME,FORCE,DURATION (s, N, s), or HOP@PHASE,FORCE,DURATION by the "
                   "phase of a hop (repeatable)");
 }
 
+std::string DefaultLawCacheDir() {
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  if (xdg != nullptr && xdg[0] == '/') return std::string(xdg) + "/ddoc";
+  const char* home = std::getenv("HOME");
+  if (home != nullptr && home[0] != '\0') return std::string(home) + "/.cache/ddoc";
+  return "";
+}
+
 namespace {
+
+// The robot MJCF `path` with its includes inlined and `variant` applied (ExpandRobotMjcf), loaded
+// from a temporary file; errors name `path`.
+MjModelPtr LoadExpandedMjcf(const std::string& path, const RobotVariant& variant) {
+  const std::string text = ExpandRobotMjcf(path, variant);
+  char name[] = "/tmp/ddoc-robot-XXXXXX.xml";
+  const int fd = mkstemps(name, 4);
+  if (fd < 0) throw std::runtime_error("robot MJCF '" + path + "': cannot create a temporary file");
+  const bool written = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+  close(fd);
+  try {
+    if (!written) throw std::runtime_error("cannot write " + std::string(name));
+    MjModelPtr m = LoadMjcf(name);
+    unlink(name);
+    return m;
+  } catch (const std::exception& e) {
+    unlink(name);
+    throw std::runtime_error("robot MJCF '" + path + "' (includes inlined into " + name +
+                             "): " + e.what());
+  }
+}
 
 // The scenario file with the command-line overrides applied and validated.
 Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
@@ -206,7 +246,13 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   HopperParams params;
   try {
     run.scenario = ScenarioWithOverrides(scenario_path, overrides);
-    run.model = LoadMjcf(run.scenario.robot_mjcf);
+    const std::string& robot = run.scenario.robot_mjcf;
+    const RobotVariant variant = overrides.robot_variant.empty()
+                                     ? RobotVariant()
+                                     : ParseRobotVariant(overrides.robot_variant, "--robot-variant");
+    run.robot_name = robot + (variant.empty() ? "" : " with " + variant.ToString());
+    run.model = variant.empty() && !IncludesNeedResolving(robot) ? LoadMjcf(robot)
+                                                               : LoadExpandedMjcf(robot, variant);
     const HopperMapping map = HopperMapping::Build(run.model.get(), run.scenario.robot_mjcf);
     CheckSpringsAreStableAtTheTimestep(run.model.get(), map, run.scenario.robot_mjcf);
     params = ModelParams(run.scenario);
@@ -220,9 +266,15 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
   if (overrides.measured_latency) run.config.measured_latency = true;
   run.config.law_cache = overrides.law_cache;
-  if (run.config.law_cache.empty()) {
+  if (overrides.no_law_cache) {
+    run.config.law_cache.clear();
+  } else if (run.config.law_cache.empty()) {
     const char* env = std::getenv("DDOC_LAW_CACHE");
-    if (env != nullptr) run.config.law_cache = env;
+    if (env != nullptr) {
+      run.config.law_cache = env;
+    } else if (overrides.user_law_cache) {
+      run.config.law_cache = DefaultLawCacheDir();
+    }
   }
   run.data.reset(mj_makeData(run.model.get()));
   if (start_controller) StartController(&run);
@@ -352,9 +404,10 @@ struct RunFrames::Impl {
 
 RunFrames::RunFrames(const Settings& s, const mjModel* m, const std::string& method,
                      const std::string&) {
-  if (s.dir.empty()) return;
+  if (s.dir.empty() && s.video.empty()) return;
   RenderSettings render;
   render.dir = s.dir;
+  render.video = s.video;
   render.width = s.width;
   render.height = s.height;
   render.fps = s.fps;
@@ -379,16 +432,23 @@ bool RunFrames::Finish(std::string* error) { return !impl_ || impl_->recorder->F
 long RunFrames::frame_count() const {
   return impl_ ? static_cast<long>(impl_->recorder->frame_count()) : 0;
 }
+
+std::string RunFrames::video_message() const {
+  return impl_ ? impl_->recorder->video_message() : "";
+}
 #else
 struct RunFrames::Impl {};
 
 RunFrames::RunFrames(const Settings& s, const mjModel*, const std::string&,
                      const std::string& flag) {
-  if (!s.dir.empty()) throw RunError(kExitBadInput, flag + ": this build has no OSMesa rendering");
+  if (!s.dir.empty() || !s.video.empty()) {
+    throw RunError(kExitBadInput, flag + ": this build has no OSMesa rendering");
+  }
 }
 void RunFrames::Capture(const mjModel*, mjData*, int, double, double) {}
 bool RunFrames::Finish(std::string*) { return true; }
 long RunFrames::frame_count() const { return 0; }
+std::string RunFrames::video_message() const { return ""; }
 #endif
 
 RunFrames::~RunFrames() = default;

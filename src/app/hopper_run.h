@@ -72,6 +72,9 @@ struct RunOverrides {
   std::optional<int> hops;               ///< --hops N (alone: no seconds limit)
   std::optional<double> seconds;         ///< --seconds S (alone: no hops limit)
   std::string robot;                     ///< --robot MJCF
+  /// --robot-variant mass=KG,j_body=KGM2,c_d=KG_PER_M,beta=RAD_PER_S: the robot's numbers
+  /// (robot_variant.h; docs/hopper.md, "Robot variants"); empty: the robot file's.
+  std::string robot_variant;
   std::string model_mjcf;                ///< --model-mjcf MJCF: replaces the scenario's <model>
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
@@ -79,17 +82,28 @@ struct RunOverrides {
   /// --offline-latency measured: ControllerConfig::measured_latency (the floor stays 0.02 s).
   bool measured_latency = false;
   std::string preset;                    ///< --preset default | paper (overrides the scenario)
-  /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE.
+  /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE (set
+  /// and empty: off), then, when `user_law_cache`, DefaultLawCacheDir(), else off.
   std::string law_cache;
+  bool no_law_cache = false;  ///< --no-law-cache: always solve u^0 (no cache read or written)
+  /// An unset law cache falls back to the per-user DefaultLawCacheDir(); Register sets it (the
+  /// command-line tools), false (default) for other callers (Python's run_hopper).
+  bool user_law_cache = false;
 
   /// Registers the flags shared by ddoc-hopper and ddoc-return-map on `cli`; `full` adds those
-  /// only ddoc-hopper takes (--hops, --seconds, --robot, --model-mjcf, --push).
+  /// only ddoc-hopper takes (--hops, --seconds, --robot, --robot-variant, --model-mjcf, --push).
   void Register(CLI::App* cli, bool full);
 };
+
+/// The per-user directory of stored u^0 laws: $XDG_CACHE_HOME/ddoc when XDG_CACHE_HOME is an
+/// absolute path, else $HOME/.cache/ddoc; "" (no cache) when neither is set.
+std::string DefaultLawCacheDir();
 
 /// A scenario loaded and ready to step.
 struct LoadedRun {
   Scenario scenario;
+  /// The robot's MJCF as summary.json names it: the file, and " with mass=..." for a variant.
+  std::string robot_name;
   plugin::ControllerConfig config;
   MjModelPtr model;
   MjDataPtr data;
@@ -156,14 +170,16 @@ class RunStepper {
   Eigen::Matrix<double, 14, 1> x_ = Eigen::Matrix<double, 14, 1>::Zero();
 };
 
-/// PNG frames of a run (ddoc-hopper --render, ddoc.run_hopper(render_dir=...)): a FrameRecorder
-/// with the hopper's overlay (method, hop, last cost, speed); nothing when `dir` is empty.
+/// PNG frames and/or the video of a run (ddoc-hopper --render, --video;
+/// ddoc.run_hopper(render_dir=...)): a FrameRecorder with the hopper's overlay (method, hop, last
+/// cost, speed); nothing when `dir` and `video` are empty.
 class RunFrames {
  public:
   struct Settings {
     std::string dir;  ///< PNG directory; empty: no frames
     int width = 640, height = 480;
     double fps = 60;
+    std::string video{};  ///< MP4 streamed through ffmpeg (no PNG needed); empty: no video
   };
   /// Throws RunError(kExitBadInput) for a bad setting, or a `dir` in a build without rendering;
   /// `flag` names the option in the message ("--render" -> "--render: this build has no ...").
@@ -174,8 +190,10 @@ class RunFrames {
   RunFrames& operator=(const RunFrames&) = delete;
   /// The frames due now (FrameRecorder::MaybeCapture); throws std::runtime_error naming the file.
   void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed);
-  /// Waits for the queued writes; false and *error when one failed.
+  /// Waits for the queued writes and finishes the video; false and *error when one failed.
   bool Finish(std::string* error);
+  /// After Finish: "video: wrote PATH (...)" or why it failed; "" without a video.
+  std::string video_message() const;
   /// Frames written or queued so far.
   long frame_count() const;
   bool active() const { return impl_ != nullptr; }

@@ -12,39 +12,60 @@
 
 #include <CLI/CLI.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <deque>
+#include <exception>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hopper_run.h"
 #include "run_log.h"
-#ifdef DDOC_HAVE_RENDER
-#include "ddoc/render/video.h"
-#endif
 
 namespace ddoc::app {
 namespace {
 
 // The signal that asked the run to stop (SIGINT or SIGTERM), 0 while none did.
 volatile std::sig_atomic_t g_stop_signal = 0;
+// Stop signals received so far.
+volatile std::sig_atomic_t g_stop_count = 0;
 
-extern "C" void OnStopSignal(int signal) { g_stop_signal = signal; }
+// The first and the second stop signal ask the run to end (the main thread checks every step
+// and, during the start, every 50 ms, then writes the logs and summary.json); the third kills
+// the process (the signal's default action), for a run that does not react.
+extern "C" void OnStopSignal(int signal) {
+  if (g_stop_signal == 0) g_stop_signal = signal;
+  g_stop_count = g_stop_count + 1;
+  if (g_stop_count >= 3) {
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+  }
+}
 
-// SIGINT and SIGTERM end the run after the current step, with the logs complete; a second one
-// kills it (SA_RESETHAND). A file size limit makes a write fail (EFBIG, reported as an I/O
-// error) instead of killing the process with SIGXFSZ.
+// SIGINT and SIGTERM end the run after the current step, with the logs complete (OnStopSignal).
+// A file size limit makes a write fail (EFBIG, reported as an I/O error) instead of killing the
+// process with SIGXFSZ.
 void InstallSignalHandlers() {
   struct sigaction sa = {};
   sa.sa_handler = OnStopSignal;
   sigemptyset(&sa.sa_mask);
-  sa.sa_flags = SA_RESETHAND;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   std::signal(SIGXFSZ, SIG_IGN);
+}
+
+const char* StopSignalName() { return g_stop_signal == SIGINT ? "SIGINT" : "SIGTERM"; }
+
+// The wall clock of the whole run (summary.json's wall_time_s): from the start of main.
+const std::chrono::steady_clock::time_point g_wall0 = std::chrono::steady_clock::now();
+
+double WallTime() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - g_wall0).count();
 }
 
 struct Options {
@@ -67,11 +88,13 @@ int ParseOptions(int argc, char** argv, Options* o) {
   cli.add_option("--out,-o", o->out, "output directory (default: out/<scenario name>)");
   o->run.Register(&cli, true);
   cli.add_option("--log-every", o->log_every, "write every N-th physics step to trajectory.csv");
-  cli.add_option("--render", o->render_dir, "write PNG frames into this directory");
+  cli.add_option("--render", o->render_dir,
+                 "write PNG frames into this directory (with --video: the video too)");
   cli.add_option("--width", o->width, "frame width in pixels (default 640)");
   cli.add_option("--height", o->height, "frame height in pixels (default 480)");
   cli.add_option("--fps", o->fps, "frames per second of simulated time (default 60)");
-  cli.add_option("--video", o->video, "assemble the frames into this MP4 with ffmpeg");
+  cli.add_option("--video", o->video,
+                 "stream the frames into this MP4 through ffmpeg (no PNG files unless --render)");
   cli.add_flag("--quiet,-q", o->quiet, "no progress display");
   try {
     cli.parse(argc, argv);
@@ -85,38 +108,40 @@ int ParseOptions(int argc, char** argv, Options* o) {
   return -1;
 }
 
-// The frames of a run (none without --render; app::RunFrames) and the video. Every bad setting is
-// reported before the run.
+// The frames of a run (app::RunFrames): PNG files with --render, the MP4 streamed through ffmpeg
+// with --video (no PNG files then). Every bad setting is reported before the run.
 class Frames {
  public:
   // Throws RunError(kExitBadInput). `method` goes into the overlay.
   Frames(const Options& o, const mjModel* m, const std::string& method)
-      : frames_({o.render_dir, o.width, o.height, o.fps}, m, method, "--render") {}
+      : frames_({o.render_dir, o.width, o.height, o.fps, o.video}, m, method,
+                o.render_dir.empty() ? "--video" : "--render"),
+        video_(o.video) {}
   void Capture(const mjModel* m, mjData* d, int hop, double cost, double speed) {  // throws
     frames_.Capture(m, d, hop, cost, speed);
   }
-  int Finish(const Options& o, int exit_code);
+  // Finishes the PNG files and the video; the exit code, kExitError when they failed on a run
+  // that had none. *video: the MP4 when it was written.
+  int Finish(int exit_code, std::string* video);
+  bool active() const { return frames_.active(); }
+  long frame_count() const { return frames_.frame_count(); }
 
  private:
   RunFrames frames_;
+  std::string video_;  // --video
 };
 
-int Frames::Finish(const Options& o, int exit_code) {
+int Frames::Finish(int exit_code, std::string* video) {
   if (!frames_.active()) return exit_code;
   std::string error;
-  if (!frames_.Finish(&error)) {
+  const bool ok = frames_.Finish(&error);
+  const std::string message = frames_.video_message();
+  if (!ok) {
     std::fprintf(stderr, "ddoc-hopper: %s\n", error.c_str());
-    return kExitError;
+    return exit_code == kExitOk ? kExitError : exit_code;
   }
-#ifdef DDOC_HAVE_RENDER
-  if (o.video.empty()) return exit_code;
-  if (!AssembleVideo(o.render_dir, o.fps, o.video, &error)) {
-    std::fprintf(stderr, "ddoc-hopper: --video: %s\n", error.c_str());
-    if (exit_code == kExitOk) return kExitError;
-  }
-#else
-  (void)o;
-#endif
+  if (!message.empty()) std::fprintf(stderr, "ddoc-hopper: %s\n", message.c_str());
+  if (!video_.empty()) *video = video_;
   return exit_code;
 }
 
@@ -140,7 +165,6 @@ class HopperRun {
   void LogPushEvents();
   void LogHops();
   void Fell(const std::string& reason);
-  double WallTime() const;
 
   const Options& o_;
   LoadedRun* run_;
@@ -154,32 +178,35 @@ class HopperRun {
   std::vector<bool> push_started_, push_ended_;
   std::deque<plugin::HopReport> pending_;  // hops taken from the controller, not yet in hops.csv
   bool progress_;
-  std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now();
 };
+
+// The fields of summary.json that the scenario sets (before the controller starts).
+Summary ScenarioSummary(const LoadedRun& run) {
+  const Scenario& s = run.scenario;
+  Summary summary;
+  summary.scenario = s.name;
+  summary.method = MethodName(s.method);
+  summary.robot = run.robot_name;
+  summary.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
+  summary.offline_latency_s = run.config.offline_latency;
+  summary.offline_latency_measured = run.config.measured_latency;
+  summary.pushes = s.pushes;
+  summary.hop_pushes = s.hop_pushes;
+  return summary;
+}
 
 HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* frames)
     : o_(o), run_(run), log_(log), frames_(frames), stepper_(run),
       progress_(!o.quiet && isatty(STDERR_FILENO)) {
-  const Scenario& s = run->scenario;
-  summary_.scenario = s.name;
-  summary_.method = MethodName(s.method);
-  summary_.robot = s.robot_mjcf;
-  summary_.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
-  summary_.offline_latency_s = run->config.offline_latency;
-  summary_.offline_latency_measured = run->config.measured_latency;
+  summary_ = ScenarioSummary(*run);
   summary_.initial_law = run->controller->law_cache_status();
   // A law cache that could not be written, or held a file it could not use, is worth a line.
   if (run->controller->law_cache_trouble()) {
-    std::fprintf(stderr, "ddoc-hopper: law cache: %s\n", summary_.initial_law.c_str());
+    std::fprintf(stderr, "ddoc-hopper: warning: law cache: %s (the run goes on)\n",
+                 summary_.initial_law.c_str());
   }
-  summary_.pushes = s.pushes;
-  summary_.hop_pushes = s.hop_pushes;
   summary_.hop_push_times = stepper_.hop_push_times();
   log_->WriteSummary(summary_);
-}
-
-double HopperRun::WallTime() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0_).count();
 }
 
 bool HopperRun::Done() const {
@@ -231,8 +258,7 @@ int HopperRun::Steps() {
   if (!Capture()) return End(kExitError, "error", summary_.fall_reason);  // frame 0: the start
   while (!Done()) {
     if (g_stop_signal != 0) {
-      const std::string message = std::string("interrupted by ") +
-                                  (g_stop_signal == SIGINT ? "SIGINT" : "SIGTERM") + " at t = " +
+      const std::string message = std::string("interrupted by ") + StopSignalName() + " at t = " +
                                   std::to_string(run_->data->time) + " s";
       if (progress_) std::fputc('\n', stderr);
       std::fprintf(stderr, "ddoc-hopper: %s\n", message.c_str());
@@ -324,8 +350,13 @@ void HopperRun::LogHops() {
     last_cost_ = h.cost;
     last_speed_ = h.speed;
     if (progress_) {
-      std::fprintf(stderr, "\rhop %4d  cost %10.4g  speed %6.3f m/s  period %5.3f s  %s   ", h.hop,
+      std::fprintf(stderr, "\rhop %4d  cost %10.4g  speed %6.3f m/s  period %5.3f s  %s", h.hop,
                    h.cost, h.speed, h.t2, h.accepted ? "accepted" : "rejected");
+      if (frames_->active()) {
+        std::fprintf(stderr, "  frame %ld  t %.1f s in %.1f s", frames_->frame_count(), sim_time_,
+                     WallTime());
+      }
+      std::fputs("   ", stderr);
       std::fflush(stderr);
     }
   }
@@ -363,7 +394,8 @@ int HopperRun::Finish(int exit_code) {
     if (exit_code == kExitOk || exit_code == kExitFall) exit_code = kExitIo;
   }
   log_->FlushQuietly();
-  exit_code = frames_->Finish(o_, exit_code);
+  std::string video;
+  exit_code = frames_->Finish(exit_code, &video);
   if (summary_.late_hops > 0) {  // the result assumes a faster offline computer than this one
     std::fprintf(stderr,
                  "ddoc-hopper: the offline part took longer than the simulated latency (%g s) on "
@@ -372,10 +404,81 @@ int HopperRun::Finish(int exit_code) {
   }
   char cost[48] = "";
   if (summary_.hops > 0) std::snprintf(cost, sizeof(cost), ", final cost %.4g", summary_.final_cost);
-  std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s%s, wrote %s\n", summary_.scenario.c_str(),
-               summary_.method.c_str(), summary_.hops,
-               summary_.fell ? "FELL" : summary_.end.c_str(), cost, o_.out.c_str());
+  // The last line: how the run ended and where its files are (the video's path included).
+  std::fprintf(stderr, "ddoc-hopper: %s %s: %d hops, %s%s, wrote %s%s%s\n",
+               summary_.scenario.c_str(), summary_.method.c_str(), summary_.hops,
+               summary_.fell ? "FELL" : summary_.end.c_str(), cost, o_.out.c_str(),
+               video.empty() ? "" : " and the video ", video.c_str());
   return exit_code;
+}
+
+// Starts the controller (StartController: the nominal gait and, without a stored law, the u^0
+// solve on the model, about 11 s) on a thread while this thread shows the elapsed time on a
+// terminal and checks for SIGINT/SIGTERM every 50 ms. Returns false when a signal came first: the
+// start is abandoned and the thread left running (the caller ends the process with _Exit).
+// Rethrows what StartController threw.
+bool StartControllerWatched(LoadedRun* run, bool progress) {
+  std::atomic<bool> done{false};
+  std::exception_ptr error;
+  std::thread start([&] {
+    try {
+      StartController(run);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    done.store(true);
+  });
+  const double t0 = WallTime();
+  const char* cache = run->config.law_cache.empty() ? "law cache off" : "law cache on";
+  while (!done.load()) {
+    if (g_stop_signal != 0) {
+      start.detach();
+      return false;
+    }
+    if (progress) {
+      std::fprintf(stderr, "\rddoc-hopper: starting: the nominal gait and u^0 on the model (%s) %5.1f s ",
+                   cache, WallTime() - t0);
+      std::fflush(stderr);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  start.join();
+  if (error) std::rethrow_exception(error);
+  if (progress) {
+    std::fprintf(stderr, "\rddoc-hopper: started in %.1f s; u^0 %s\033[K\n", WallTime() - t0,
+                 run->controller->law_cache_status().c_str());
+  }
+  return true;
+}
+
+// A signal during the start: summary.json says so (no hop ran), then the process ends at once
+// with exit code 4 (the start's thread is still computing).
+[[noreturn]] void EndDuringStart(const Options& o, const LoadedRun& run, RunLog* log,
+                                 bool progress) {
+  Summary summary = ScenarioSummary(run);
+  summary.initial_law = "not derived: interrupted";
+  summary.wall_time_s = WallTime();
+  summary.end = "interrupted";
+  char message[160];
+  std::snprintf(message, sizeof(message),
+                "interrupted by %s during the start (deriving u^0), %.2f s after it began",
+                StopSignalName(), summary.wall_time_s);
+  summary.end_message = message;
+  if (progress) std::fputc('\n', stderr);
+  std::fprintf(stderr, "ddoc-hopper: %s\n", message);
+  int code = kExitInterrupted;
+  try {
+    log->Flush();
+    log->WriteSummary(summary);
+  } catch (const RunLogError& e) {
+    std::fprintf(stderr, "ddoc-hopper: %s\n", e.what());
+    code = kExitIo;
+  }
+  log->FlushQuietly();
+  std::fprintf(stderr, "ddoc-hopper: %s %s: 0 hops, interrupted, wrote %s\n",
+               summary.scenario.c_str(), summary.method.c_str(), o.out.c_str());
+  std::fflush(stderr);
+  std::_Exit(code);
 }
 
 int Run(int argc, char** argv) {
@@ -387,7 +490,6 @@ int Run(int argc, char** argv) {
   // settings and an unwritable --out fail at once, not after u^0 is derived.
   LoadedRun run = LoadRun(o.scenario, o.run, /*start_controller=*/false);
   if (o.out.empty()) o.out = "out/" + run.scenario.name;
-  if (!o.video.empty() && o.render_dir.empty()) o.render_dir = o.out + "/frames";
   Frames frames(o, run.model.get(), MethodName(run.scenario.method));
   std::unique_ptr<RunLog> log;
   try {
@@ -395,7 +497,8 @@ int Run(int argc, char** argv) {
   } catch (const std::exception& e) {
     throw RunError(kExitBadInput, e.what());
   }
-  StartController(&run);
+  const bool progress = !o.quiet && isatty(STDERR_FILENO);
+  if (!StartControllerWatched(&run, progress)) EndDuringStart(o, run, log.get(), progress);
   std::unique_ptr<HopperRun> hopper;
   try {
     hopper = std::make_unique<HopperRun>(o, &run, log.get(), &frames);  // writes summary.json

@@ -35,7 +35,10 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   hops = h.hop + 1;
   final_cost = h.cost;
   final_i4 = h.terms.i4;
-  (h.accepted ? accepted : rejected) += 1;
+  // Learning trials only (alpha > 0): the warm-up hops, OC-FB and the re-runs of u^0 run the law
+  // of alpha = 0, which (36) does not judge. The robustness map and results_table count the same.
+  if (learns && h.alpha > 0) (h.accepted ? accepted : rejected) += 1;
+  ++counted_;
   restarts += h.restarted ? 1 : 0;
   remeasured += h.remeasured ? 1 : 0;
   if (converged_hop < 0 && h.status == LearnerStatus::kConverged) converged_hop = h.hop;
@@ -43,7 +46,7 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   learner_status = learns ? LearnerStatusName(h.status) : "none";
   speed_sum_ += h.speed;
   period_sum_ += h.t2;
-  const int n = accepted + rejected;
+  const int n = counted_;
   mean_speed = speed_sum_ / n;
   mean_period = period_sum_ / n;
   if (std::isfinite(h.stance_mass)) {

@@ -64,6 +64,9 @@ struct Summary {
   double mean_stance_mass = std::nan("");  // kg, over the hops with a stance_mass; NaN: none
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
+  /// Learning trials (hops run with alpha > 0, the ones (36) judges) accepted / rejected: the
+  /// warm-up hops, OC-FB and mRL's re-runs of u^0 are neither (tools/ddoc_results.py counts the
+  /// same from hops.csv: accepted and alpha > 0).
   int accepted = 0, rejected = 0;
   int restarts = 0;  // hops after which the line search restarted (restart_on_failure)
   int remeasured = 0;  // hops that re-ran the nominal's law (remeasure_nominal)
@@ -81,6 +84,7 @@ struct Summary {
   double speed_sum_ = 0.0, period_sum_ = 0.0, stance_mass_sum_ = 0.0;
   std::vector<double> offline_ms_;  // per hop handed to the offline part
   int stance_mass_hops_ = 0;
+  int counted_ = 0;  // hops added
 };
 
 /// Opens DIR/{hops,trajectory,events}.csv (creating DIR) and writes the headers.

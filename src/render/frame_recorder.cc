@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "ddoc/render/png.h"
+#include "ddoc/render/video.h"
 #include "png_writer.h"
 
 namespace ddoc {
@@ -86,9 +87,16 @@ std::unique_ptr<FrameRecorder> FrameRecorder::Create(const mjModel* m,
   recorder->settings_ = settings;
   recorder->renderer_ = OffscreenRenderer::Create(m, settings, error);
   if (!recorder->renderer_) return nullptr;
-  recorder->stale_removed_ = RemoveStaleFrames(settings.dir, error);
-  if (recorder->stale_removed_ < 0) return nullptr;
-  if (settings.async_write) {
+  if (!settings.dir.empty()) {
+    recorder->stale_removed_ = RemoveStaleFrames(settings.dir, error);
+    if (recorder->stale_removed_ < 0) return nullptr;
+  }
+  if (!settings.video.empty()) {
+    recorder->video_ = VideoStream::Start(settings.video, settings.width, settings.height,
+                                          settings.fps, error);
+    if (!recorder->video_) return nullptr;
+  }
+  if (settings.async_write && !settings.dir.empty()) {
     recorder->writer_ = std::make_unique<PngWriterQueue>(settings.width, settings.height);
   }
   return recorder;
@@ -105,7 +113,8 @@ std::string FrameRecorder::FramePath(int64_t j) const {
 bool FrameRecorder::MaybeCapture(const mjModel* m, mjData* d, const Overlay& overlay) {
   // A new trial (simulated time went back), or the first call: the current state becomes
   // the next frame, numbering continues.
-  if (last_time_ < 0 || d->time < last_time_) {
+  const bool segment_start = last_time_ < 0 || d->time < last_time_;
+  if (segment_start) {
     offset_ = static_cast<double>(next_frame_) / settings_.fps - d->time;
   }
   last_time_ = d->time;
@@ -115,16 +124,33 @@ bool FrameRecorder::MaybeCapture(const mjModel* m, mjData* d, const Overlay& ove
   const double tolerance = 0.5 * m->opt.timestep;
   std::vector<std::string>& paths = paths_;
   paths.clear();
+  int due = 0;
   while (static_cast<double>(next_frame_) / settings_.fps <= r + tolerance) {
-    paths.push_back(FramePath(next_frame_));
+    if (!settings_.dir.empty()) paths.push_back(FramePath(next_frame_));
     ++next_frame_;
+    ++due;
   }
-  if (paths.empty()) return false;
+  if (due == 0) return false;
+
+  // The start of a recording (or of a trial after a reset) is usually a state no mj_step or
+  // mj_forward has seen: its poses and velocities (xpos, geom_xpos, cam_xpos, cvel, ...) are
+  // those of the previous state, or zeros after mj_resetData. Compute them from qpos and qvel
+  // (positions, com, cameras and lights, com velocities: no control callback, no state change).
+  if (segment_start) {
+    mj_kinematics(m, d);
+    mj_comPos(m, d);
+    mj_camlight(m, d);
+    mj_comVel(m, d);
+  }
 
   FormatOverlay(overlay, m, d, renderer_->track_body_id(), &labels_, &values_);
   renderer_->Render(m, d, labels_, values_, &rgb_);
 
   std::string message;
+  for (int i = 0; video_ && i < due; ++i) {
+    if (!video_->WriteFrame(rgb_, &message)) throw std::runtime_error("render: " + message);
+  }
+  if (paths.empty()) return true;
   if (writer_) {
     if (!writer_->Push(rgb_, paths, &message)) throw std::runtime_error("render: " + message);
     return true;
@@ -140,11 +166,18 @@ bool FrameRecorder::MaybeCapture(const mjModel* m, mjData* d, const Overlay& ove
 }
 
 bool FrameRecorder::Finish(std::string* error) {
-  if (!writer_) return true;
   std::string message;
-  if (!writer_->Flush(&message)) {
+  if (writer_ && !writer_->Flush(&message)) {
     if (error) *error = "render: " + message;
     return false;
+  }
+  if (video_) {
+    const bool ok = video_->Finish(&video_message_);
+    video_.reset();
+    if (!ok) {
+      if (error) *error = "render: " + video_message_;
+      return false;
+    }
   }
   return true;
 }

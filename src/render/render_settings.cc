@@ -59,12 +59,11 @@ bool ValidateRenderGeometry(const RenderSettings& s, std::string* error) {
   return CheckNumbers(s, error);
 }
 
-bool RenderSettings::Validate(std::string* error) const {
-  if (!CheckNumbers(*this, error)) return false;
-  if (dir.empty()) return Fail(error, "output directory is empty");
+namespace {
 
-  // Create the directory (and parents). create_directories reports, e.g., a regular file
-  // in the way as "Not a directory" / "File exists".
+// Creates `dir` (and parents) when missing and checks that a file can be created in it.
+bool PrepareDirectory(const std::string& dir, std::string* error) {
+  // create_directories reports, e.g., a regular file in the way as "Not a directory".
   const fs::path path(dir);
   std::error_code ec;
   if (!fs::exists(path, ec)) {
@@ -88,6 +87,21 @@ bool RenderSettings::Validate(std::string* error) const {
   std::fclose(f);
   fs::remove(probe, ec);
   return true;
+}
+
+}  // namespace
+
+bool RenderSettings::Validate(std::string* error) const {
+  if (!CheckNumbers(*this, error)) return false;
+  if (dir.empty() && video.empty()) return Fail(error, "output directory is empty");
+  if (!dir.empty() && !PrepareDirectory(dir, error)) return false;
+  if (video.empty()) return true;
+  std::error_code ec;
+  if (fs::is_directory(video, ec)) {
+    return Fail(error, "video file '" + video + "' is a directory");
+  }
+  const fs::path parent = fs::path(video).parent_path();
+  return PrepareDirectory(parent.empty() ? std::string(".") : parent.string(), error);
 }
 
 }  // namespace ddoc

@@ -5,12 +5,17 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#ifdef DDOC_TEST_RENDER
+#include "ddoc/render/png.h"
+#endif
 
 namespace {
 
@@ -114,6 +119,10 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --offline-latency soon", "\"soon\" is neither a number of s nor measured"},
       {Out("fast.xml"), "no periodic gait at 5 m/s"},
       {Out("stiff.xml"), "scenario <model>: the model (M = 10, J_body = 2.5, J_leg = 1e-06"},
+      {good + " --robot-variant mass=-1", "--robot-variant: mass=-1, expected > 0"},
+      {good + " --robot-variant weight=3", "--robot-variant: unknown key \"weight\""},
+      {good + " --robot-variant c_d=x", "--robot-variant: c_d=x: not a finite number"},
+      {good + " --robot-variant mass=9,mass=10", "--robot-variant: mass given twice"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args);
@@ -164,7 +173,136 @@ TEST_F(CliTest, RenderingDoesNotChangeTheRun) {
   }
   EXPECT_NEAR(frames, t_end * 20 + 1, 1.0);
 }
+
+// Frame 0 shows the robot at its start, like frame 1 (1/fps later), not the sky alone: the start
+// state had no poses (no mj_step or mj_forward had seen it), so the hopper was missing.
+TEST_F(CliTest, FrameZeroShowsTheHopper) {
+  const Result r = RunCli(Scenario("default.xml") + " --hops 0 --seconds 0.1 -q --out " +
+                          Out("o") + " --render " + Out("frames") + " --width 96 --height 72");
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::vector<unsigned char> f0, f1;
+  int w = 0, h = 0;
+  std::string error;
+  ASSERT_TRUE(ddoc::ReadPng(Out("frames/frame_000000.png"), &f0, &w, &h, &error)) << error;
+  ASSERT_TRUE(ddoc::ReadPng(Out("frames/frame_000001.png"), &f1, &w, &h, &error)) << error;
+  ASSERT_EQ(f0.size(), f1.size());
+  // Pixels that differ clearly between the two frames: the overlay's time and speed only.
+  long differ = 0;
+  for (size_t i = 0; i < f0.size(); i += 3) {
+    differ += std::abs(f0[i] - f1[i]) + std::abs(f0[i + 1] - f1[i + 1]) +
+                      std::abs(f0[i + 2] - f1[i + 2]) > 60 ? 1 : 0;
+  }
+  EXPECT_LT(differ, static_cast<long>(f0.size() / 3 / 20)) << differ << " pixels differ";
+}
+
+// --video without --render streams the frames into the MP4 through ffmpeg: no PNG file is
+// written (it wrote out/frames/*.png and assembled them after the run), and the last line of the
+// run names the video.
+TEST_F(CliTest, VideoWithoutRenderWritesNoPngFiles) {
+  const std::string video = Out("videos/run.mp4");
+  const Result r = RunCli(Scenario("default.xml") + " --hops 1 --method ocfb -q --out " +
+                          Out("o") + " --video " + video + " --width 96 --height 72 --fps 20");
+  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_TRUE(fs::exists(video)) << r.output;
+  EXPECT_GT(fs::file_size(video), 1000u);
+  for (const auto& e : fs::recursive_directory_iterator(dir_)) {
+    EXPECT_NE(e.path().extension(), ".png") << e.path();
+  }
+  const std::vector<std::string> lines = Lines(r.output);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines.back().find(video), std::string::npos) << r.output;
+  // One frame per 1/fps of simulated time, frame 0 at t = 0.
+  const std::vector<std::string> traj = Lines(ReadFile(dir_ / "o" / "trajectory.csv"));
+  const double t_end = std::stod(traj.back().substr(0, traj.back().find(',')));
+  const size_t at = r.output.find(" frames, ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const size_t from = r.output.rfind('(', at) + 1;
+  EXPECT_NEAR(std::stol(r.output.substr(from, at - from)), std::floor(t_end * 20) + 1, 1.0)
+      << r.output;
+  // Without ffmpeg the video cannot be written: said before the run starts.
+  const Result none = RunBinary("env PATH=" + Out("no-bin") + " " + DDOC_HOPPER_BIN,
+                                Scenario("default.xml") + " --hops 1 -q --out " + Out("o2") +
+                                    " --video " + Out("v2.mp4"));
+  EXPECT_EQ(none.code, 2) << none.output;
+  EXPECT_NE(none.output.find("ffmpeg is not installed"), std::string::npos) << none.output;
+  EXPECT_FALSE(fs::exists(dir_ / "o2" / "hops.csv")) << "the simulation started";
+}
 #endif
+
+// A robot variant from anywhere: --robot-variant sets the numbers of the scenario's robot (the
+// same run as the shipped file with those numbers), and a copy of a variant outside models/ runs
+// with absolute include paths (MuJoCo 2.2 joins them onto the model's directory: "cannot load
+// MJCF 'dir//abs/hopper_common.xml'"), or says how when its relative includes are missing.
+TEST_F(CliTest, RobotVariantsWorkFromAnywhere) {
+  const std::string run = Scenario("default.xml") + " --hops 2 -q";
+  const Result shipped = RunCli(run + " --out " + Out("shipped") + " --robot " +
+                                DDOC_MODELS_DIR + "/hopper_m12.xml");
+  ASSERT_TRUE(shipped.code == 0 || shipped.code == 3) << shipped.output;
+  const Result variant =
+      RunCli(run + " --out " + Out("variant") + " --robot-variant mass=12,c_d=0.01");
+  EXPECT_EQ(variant.code, shipped.code) << variant.output;
+  EXPECT_EQ(ReadFile(dir_ / "variant" / "hops.csv"), ReadFile(dir_ / "shipped" / "hops.csv"));
+  EXPECT_NE(ReadFile(dir_ / "variant" / "summary.json").find("hopper_m8.xml with mass=12,c_d=0.01"),
+            std::string::npos);
+  // A copy with absolute includes, in a directory of its own.
+  const std::string models = DDOC_MODELS_DIR;
+  std::string text = ReadFile(models + "/hopper_m12.xml");
+  for (const char* inc : {"hopper_common.xml", "hopper_limbs.xml"}) {
+    const std::string from = std::string("file=\"") + inc + "\"";
+    text.replace(text.find(from), from.size(), "file=\"" + models + "/" + inc + "\"");
+  }
+  fs::create_directories(dir_ / "mine");
+  std::ofstream(dir_ / "mine" / "robot.xml") << text;
+  const Result copy =
+      RunCli(run + " --out " + Out("copy") + " --robot " + Out("mine/robot.xml"));
+  EXPECT_EQ(copy.code, shipped.code) << copy.output;
+  EXPECT_EQ(ReadFile(dir_ / "copy" / "hops.csv"), ReadFile(dir_ / "shipped" / "hops.csv"));
+  // A plain copy: its relative includes are missing; the message says what to do.
+  fs::copy_file(models + "/hopper_m12.xml", dir_ / "mine" / "plain.xml");
+  const Result plain = RunCli(run + " --out " + Out("plain") + " --robot " + Out("mine/plain.xml"));
+  EXPECT_EQ(plain.code, 2) << plain.output;
+  EXPECT_NE(plain.output.find("absolute include paths"), std::string::npos) << plain.output;
+  EXPECT_NE(plain.output.find("--robot-variant"), std::string::npos) << plain.output;
+}
+
+// The law cache is on by default, in $XDG_CACHE_HOME/ddoc or else ~/.cache/ddoc: a repeated run
+// loads u^0 (about 3 s instead of 11 s). A cache directory that cannot be written costs a warning,
+// not the run; --no-law-cache neither reads nor writes it.
+TEST_F(CliTest, TheLawCacheIsOnByDefaultInTheUserCacheDirectory) {
+  const std::string run = Scenario("default.xml") + " --hops 1 -q --out " + Out("o");
+  auto initial_law = [&] {
+    const std::string summary = ReadFile(dir_ / "o" / "summary.json");
+    const size_t at = summary.find("\"initial_law\": \"");
+    if (at == std::string::npos) return std::string();
+    return summary.substr(at + 16, summary.find('"', at + 16) - at - 16);
+  };
+  const std::string home = Out("home");
+  Result r = RunBinary("env -u DDOC_LAW_CACHE -u XDG_CACHE_HOME HOME=" + home + " " +
+                           DDOC_HOPPER_BIN,
+                       run);
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.output;
+  EXPECT_EQ(initial_law().rfind("stored " + home + "/.cache/ddoc/u0-", 0), 0u) << initial_law();
+  r = RunBinary("env -u DDOC_LAW_CACHE XDG_CACHE_HOME=" + home + "/.cache " + DDOC_HOPPER_BIN,
+                run);
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.output;
+  EXPECT_EQ(initial_law().rfind("loaded " + home + "/.cache/ddoc/u0-", 0), 0u) << initial_law();
+  // A file where the cache directory should be: a warning, the run goes on.
+  std::ofstream(dir_ / "file") << "x";
+  r = RunBinary("env -u DDOC_LAW_CACHE XDG_CACHE_HOME=" + Out("file") + " " + DDOC_HOPPER_BIN,
+                run);
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.output;
+  EXPECT_NE(r.output.find("law cache"), std::string::npos) << r.output;
+  EXPECT_EQ(initial_law().rfind("solved; not stored", 0), 0u) << initial_law();
+  // --no-law-cache: solved, and nothing is said about the unusable directory.
+  r = RunBinary("env -u DDOC_LAW_CACHE XDG_CACHE_HOME=" + Out("file") + " " + DDOC_HOPPER_BIN,
+                run + " --no-law-cache");
+  ASSERT_TRUE(r.code == 0 || r.code == 3) << r.output;
+  EXPECT_EQ(initial_law(), "solved");
+  EXPECT_EQ(r.output.find("law cache"), std::string::npos) << r.output;
+  r = RunCli(run + " --no-law-cache --law-cache " + Out("laws"));
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--no-law-cache"), std::string::npos) << r.output;
+}
 
 TEST_F(CliTest, AFallExitsThreeAndKeepsTheLogs) {
   // A 400 N shove for 0.3 s topples any hopper.
@@ -262,6 +400,14 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   const size_t at = summary.find("\"mean_stance_mass\": ");
   ASSERT_NE(at, std::string::npos) << summary;
   EXPECT_NEAR(std::stod(summary.substr(at + 20)), mean, 1e-6) << summary;
+  // accepted: the learning trials (alpha > 0) that (36) accepted, as the robustness map counts
+  // them from hops.csv (tools/ddoc_results.py).
+  const std::vector<double> alpha = Column(hops, 13), accepted = Column(hops, 14);
+  int trials = 0;
+  for (size_t i = 0; i < alpha.size(); ++i) trials += alpha[i] > 0 && accepted[i] > 0.5 ? 1 : 0;
+  const size_t acc = summary.find("\"accepted\": ");
+  ASSERT_NE(acc, std::string::npos) << summary;
+  EXPECT_EQ(std::stoi(summary.substr(acc + 12)), trials) << summary;
 }
 
 // A run that ends before its first hop is complete has no cost, speed or period: null in

@@ -5,6 +5,9 @@
 // disappears. Each must end with its message and exit code, every completed hop in hops.csv
 // and, where the directory still takes writes, summary.json saying how the run ended.
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -121,6 +124,59 @@ class FaultTest : public ::testing::Test {
 
   std::string Console() const { return ReadFile(dir_ / "console.txt"); }
 
+  // Starts ddoc-hopper in dir_ with `args` on a pseudo-terminal (stdout and stderr are a tty,
+  // read back with ReadTerminal), with the environment variable `env_name` set to `env_value`.
+  void StartOnTerminal(const std::vector<std::string>& args, const char* env_name,
+                       const char* env_value) {
+    std::vector<std::string> argv = {DDOC_HOPPER_BIN};
+    argv.insert(argv.end(), args.begin(), args.end());
+    pid_ = forkpty(&terminal_, nullptr, nullptr, nullptr);
+    ASSERT_GE(pid_, 0);
+    if (pid_ == 0) {
+      if (chdir(dir_.c_str()) != 0) _exit(126);
+      setenv(env_name, env_value, 1);
+      std::vector<char*> cargv;
+      for (std::string& a : argv) cargv.push_back(a.data());
+      cargv.push_back(nullptr);
+      execv(cargv[0], cargv.data());
+      _exit(127);
+    }
+    fcntl(terminal_, F_SETFL, O_NONBLOCK);
+  }
+
+  // Appends what the terminal shows within `seconds` to terminal_text_ (the run keeps writing).
+  void ReadTerminal(double seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    char buf[4096];
+    while (std::chrono::steady_clock::now() < end) {
+      pollfd p{terminal_, POLLIN, 0};
+      if (poll(&p, 1, 20) <= 0) continue;
+      const ssize_t n = read(terminal_, buf, sizeof(buf));
+      if (n <= 0) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        continue;
+      }
+      terminal_text_.append(buf, static_cast<size_t>(n));
+    }
+  }
+
+  // Reads the terminal until the run exits (at most `limit` s); its exit status (as Wait) and
+  // the seconds it took, or nullopt when it did not exit.
+  std::optional<int> WaitOnTerminal(double limit, double* seconds) {
+    const auto start = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - start < std::chrono::duration<double>(limit)) {
+      ReadTerminal(0.02);
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        status_ = status;
+        ReadTerminal(0.1);
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+      }
+    }
+    return std::nullopt;
+  }
+
   // Every hop that summary.json counts is a row of hops.csv, and no more.
   void ExpectSummaryMatchesHops(const fs::path& out, const char* end) {
     const std::string summary = ReadFile(out / "summary.json");
@@ -136,6 +192,8 @@ class FaultTest : public ::testing::Test {
   fs::path dir_;
   pid_t pid_ = -1;
   std::optional<int> status_;
+  int terminal_ = -1;
+  std::string terminal_text_;
 };
 
 TEST_F(FaultTest, SigintEndsWithExitFourAndKeepsEveryHop) {
@@ -149,6 +207,50 @@ TEST_F(FaultTest, SigintEndsWithExitFourAndKeepsEveryHop) {
   ExpectSummaryMatchesHops(out, "interrupted");
   EXPECT_NE(Field(ReadFile(out / "summary.json"), "end_message").find("SIGINT"),
             std::string::npos);
+}
+
+// The start (the nominal gait and the u^0 solve on the model, about 11 s without a stored law)
+// shows its progress on a terminal, and Ctrl-C there ends the run within 0.5 s with summary.json
+// (it was silent, took about 6 s to react, and summary.json's wall time left the start out).
+TEST_F(FaultTest, CtrlCDuringTheStartEndsAtOnceWithTheSummary) {
+  const fs::path out = dir_ / "run";
+  StartOnTerminal({Scenario("default.xml"), "--hops", "1000", "--out", out.string()},
+                  "DDOC_LAW_CACHE", "");  // set and empty: no law cache, u^0 is solved
+  ReadTerminal(2.5);
+  EXPECT_NE(terminal_text_.find("u^0"), std::string::npos) << terminal_text_;
+  EXPECT_EQ(terminal_text_.find("hop "), std::string::npos) << "the start took < 2.5 s";
+  ASSERT_EQ(kill(pid_, SIGINT), 0);
+  double seconds = 0;
+  const std::optional<int> code = WaitOnTerminal(30, &seconds);
+  ASSERT_TRUE(code.has_value()) << terminal_text_;
+  EXPECT_EQ(*code, 4) << terminal_text_;
+  EXPECT_LT(seconds, 1.5) << "target 0.5 s (a loaded machine gets slack)";
+  std::printf("ddoc-hopper ended %.3f s after SIGINT during the start\n", seconds);
+  EXPECT_NE(terminal_text_.find("interrupted by SIGINT during the start"), std::string::npos)
+      << terminal_text_;
+  ExpectSummaryMatchesHops(out, "interrupted");
+  EXPECT_EQ(Field(ReadFile(out / "summary.json"), "hops"), "0");
+  EXPECT_GE(std::stod(Field(ReadFile(out / "summary.json"), "wall_time_s")), 2.0);
+}
+
+// A second SIGINT right after the first (an impatient Ctrl-C) still ends the run with its logs
+// and summary.json (it killed the run); summary.json's wall time covers the whole run, start
+// included.
+TEST_F(FaultTest, ASecondSigintStillWritesTheSummary) {
+  const fs::path out = dir_ / "run";
+  const auto start = std::chrono::steady_clock::now();
+  Start({Scenario("default.xml"), "--hops", "1000", "-q", "--out", out.string()});
+  ASSERT_TRUE(WaitForHops(out / "hops.csv", 2)) << Console();
+  ASSERT_EQ(kill(pid_, SIGINT), 0);
+  ASSERT_EQ(kill(pid_, SIGINT), 0);
+  EXPECT_EQ(Wait(), 4) << Console();
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GE(DataRows(out / "hops.csv"), 2);
+  ExpectSummaryMatchesHops(out, "interrupted");
+  const double wall = std::stod(Field(ReadFile(out / "summary.json"), "wall_time_s"));
+  EXPECT_GT(wall, 0.8 * elapsed - 0.2) << "the run took " << elapsed << " s";
+  EXPECT_LE(wall, elapsed);
 }
 
 TEST_F(FaultTest, SigtermEndsWithExitFourAndKeepsEveryHop) {

@@ -397,5 +397,35 @@ TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
   EXPECT_THROW(RunLog("/proc/ddoc_cannot_write_here", "alg1"), std::runtime_error);
 }
 
+// summary.json's accepted counts what the robustness map and results_table count from hops.csv:
+// learning trials (alpha > 0) that (36) accepted. The warm-up hops (alpha = 0, reported as
+// accepted since (36) does not judge them) are not trials; it counted them (2 vs the map's 1).
+TEST(RunLogTest, AcceptedCountsLearningTrialsOnly) {
+  Summary alg1;
+  const struct {
+    double alpha;
+    bool accepted;
+  } hops[] = {{0.0, true}, {0.0, true}, {1.0, true}, {0.5, false}, {0.5, true}};
+  int hop = 0;
+  for (const auto& x : hops) {
+    plugin::HopReport h;
+    h.hop = hop++;
+    h.alpha = x.alpha;
+    h.accepted = x.accepted;
+    h.speed = 0.5;
+    alg1.AddHop(h, /*learns=*/true);
+  }
+  EXPECT_EQ(alg1.accepted, 2);
+  EXPECT_EQ(alg1.rejected, 1);
+  EXPECT_EQ(alg1.hops, 5);
+  EXPECT_DOUBLE_EQ(alg1.mean_speed, 0.5);  // over every hop
+  Summary ocfb;
+  plugin::HopReport h;
+  h.accepted = true;
+  ocfb.AddHop(h, /*learns=*/false);
+  EXPECT_EQ(ocfb.accepted, 0);
+  EXPECT_EQ(ocfb.rejected, 0);
+}
+
 }  // namespace
 }  // namespace ddoc::app

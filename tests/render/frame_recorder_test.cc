@@ -104,6 +104,33 @@ TEST_F(FrameRecorderTest, FramesArePngsOfTheRequestedSize) {
   EXPECT_EQ(h, 72);
 }
 
+// The first frame of a recording shows the state as it is, even when no mj_step or mj_forward
+// has computed its poses (ddoc-hopper's frame 0 after the controller placed the robot): the same
+// image as after mj_forward. It showed the sky only, with the speed "+0.000".
+TEST_F(FrameRecorderTest, FirstFrameOfAStateNoStepHasSeenShowsIt) {
+  auto m = testing::LoadModel(testing::TestModelXml(true));
+  std::string error;
+  std::vector<std::vector<unsigned char>> images;
+  for (const bool forward : {false, true}) {
+    auto d = testing::MakeData(m.get());
+    d->qpos[0] = 0.3;  // x
+    d->qpos[2] = 0.4;  // pitch
+    d->qvel[0] = 0.7;  // the overlay's speed
+    if (forward) mj_forward(m.get(), d.get());
+    RenderSettings settings = Small(60);
+    settings.dir = (dir_ / (forward ? "forward" : "placed")).string();
+    settings.async_write = false;
+    auto rec = FrameRecorder::Create(m.get(), settings, &error);
+    ASSERT_NE(rec, nullptr) << error;
+    ASSERT_TRUE(rec->MaybeCapture(m.get(), d.get(), Overlay()));
+    std::vector<unsigned char> rgb;
+    int w = 0, h = 0;
+    ASSERT_TRUE(ReadPng(rec->FramePath(0), &rgb, &w, &h, &error)) << error;
+    images.push_back(rgb);
+  }
+  EXPECT_TRUE(images[0] == images[1]) << "frame 0 differs from the same state after mj_forward";
+}
+
 TEST_F(FrameRecorderTest, NumberingContinuesAcrossTrials) {
   auto m = testing::LoadModel(testing::TestModelXml(true));
   auto d = testing::MakeData(m.get());

@@ -123,5 +123,59 @@ TEST_F(VideoTest, AssemblesAnMp4WhenFfmpegIsInstalled) {
   EXPECT_EQ(std::string(head + 4, 4), "ftyp");
 }
 
+// A recording with settings.video and no dir streams the frames through ffmpeg: the MP4 has one
+// frame per 1/fps of simulated time and no PNG file is written.
+TEST_F(VideoTest, StreamsFramesIntoAnMp4WithoutPngFiles) {
+  const char* path = std::getenv("PATH");
+  if (FindExecutable("ffmpeg", path ? path : "").empty()) {
+    GTEST_SKIP() << "ffmpeg is not installed";
+  }
+  auto m = testing::LoadModel(testing::TestModelXml(true));
+  auto d = testing::MakeData(m.get());
+  RenderSettings s;
+  s.video = (dir_ / "videos" / "run.mp4").string();  // its directory is created
+  s.width = 95;
+  s.height = 71;
+  s.fps = 20;
+  std::string error;
+  auto rec = FrameRecorder::Create(m.get(), s, &error);
+  ASSERT_NE(rec, nullptr) << error;
+  rec->MaybeCapture(m.get(), d.get(), Overlay());
+  while (d->time < 0.25 - 1e-9) {
+    d->ctrl[0] = 1;
+    mj_step(m.get(), d.get());
+    rec->MaybeCapture(m.get(), d.get(), Overlay());
+  }
+  ASSERT_TRUE(rec->Finish(&error)) << error;
+  EXPECT_NE(rec->video_message().find("wrote " + s.video + " (6 frames"), std::string::npos)
+      << rec->video_message();
+  ASSERT_TRUE(fs::exists(s.video));
+  std::ifstream in(s.video, std::ios::binary);
+  char head[8] = {};
+  in.read(head, 8);
+  EXPECT_EQ(std::string(head + 4, 4), "ftyp");
+  for (const auto& e : fs::recursive_directory_iterator(dir_)) {
+    EXPECT_NE(e.path().extension(), ".png") << e.path();
+  }
+}
+
+TEST_F(VideoTest, AStreamSaysClearlyWhenFfmpegIsNotInstalledOrAFrameIsWrong) {
+  std::string error;
+  {
+    ScopedPath empty((dir_ / "no-such-dir").string());
+    EXPECT_EQ(VideoStream::Start((dir_ / "a.mp4").string(), 96, 72, 20, &error), nullptr);
+    EXPECT_NE(error.find("ffmpeg is not installed"), std::string::npos) << error;
+  }
+  EXPECT_EQ(VideoStream::Start((dir_ / "a.mp4").string(), 96, 72, 0, &error), nullptr);
+  EXPECT_NE(error.find("fps must be > 0"), std::string::npos) << error;
+  const char* path = std::getenv("PATH");
+  if (FindExecutable("ffmpeg", path ? path : "").empty()) return;
+  fs::create_directories(dir_);
+  auto v = VideoStream::Start((dir_ / "a.mp4").string(), 96, 72, 20, &error);
+  ASSERT_NE(v, nullptr) << error;
+  EXPECT_FALSE(v->WriteFrame(std::vector<unsigned char>(10), &error));
+  EXPECT_NE(error.find("expected 20736"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace ddoc

@@ -266,6 +266,19 @@ class InterruptTest(TempDirTest):
 
 
 class UsageTest(TempDirTest):
+    def test_help_is_whole_and_lists_every_command(self):
+        # It stopped mid-sentence (the docstring's first line) and named no other command.
+        r = run_tool("robustness_map", "--help")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        description = r.stdout.split("\n\n")[1]
+        self.assertTrue(description.rstrip().endswith("."), description)
+        for command in ("merge SLICE_DIR", "report DIR", "slurm-task", "exit status"):
+            self.assertIn(command, r.stdout)
+        for command in ("merge", "report", "slurm-task"):
+            r = run_tool("robustness_map", command, "--help")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn(f"robustness_map {command}", r.stdout)
+
     def test_bad_usage(self):
         self.assert_usage_errors("robustness_map", [
             (["--shard", "3/3", "--hopper", FAKE], ["--shard \"3/3\"", "0 <= I < N"]),

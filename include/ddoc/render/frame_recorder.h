@@ -19,6 +19,7 @@
 namespace ddoc {
 
 class PngWriterQueue;  // background PNG encoder (src/render/png_writer.h)
+class VideoStream;     // ffmpeg through a pipe (ddoc/render/video.h)
 
 /// The text drawn in the top-left corner of every frame, as a label/value table.
 /// A field at its "unset" value is shown as "-".
@@ -44,6 +45,8 @@ void FormatOverlay(const Overlay& overlay, const mjModel* m, const mjData* d, in
                    std::string* labels, std::string* values);
 
 /// Owns an OffscreenRenderer and writes settings.dir/frame_000000.png, frame_000001.png, ...
+/// and/or streams the same frames into the MP4 settings.video (VideoStream, no files between).
+/// Only the frames due are rendered (one render per call, whatever the number due).
 ///
 /// Frame clock. Frame j is due at recording time t_j = j / fps. The recording time is
 /// r = d->time + offset. MaybeCapture() is meant to be called once after every mj_step
@@ -59,6 +62,10 @@ void FormatOverlay(const Overlay& overlay, const mjModel* m, const mjData* d, in
 /// Several trials in one recording. When d->time goes backwards (a reset for the next
 /// trial), offset is chosen so that the new trial's first state falls due at once as the
 /// next frame: numbering continues and each trial contributes floor(T_i fps) + 1 frames.
+///
+/// The first frame of a recording or of a trial shows the state as it is: MaybeCapture computes
+/// its poses and velocities from qpos and qvel (mj_kinematics, mj_comPos, mj_camlight,
+/// mj_comVel), so no mj_forward is needed after a reset (it would run the control callback).
 ///
 /// Files. Create() deletes stale frame_NNNNNN.png files (exactly 6 digits) left in dir
 /// by an earlier run, so that a video assembled from dir never mixes two runs; other
@@ -82,9 +89,13 @@ class FrameRecorder {
   /// Finish()). Does not modify the simulation state.
   bool MaybeCapture(const mjModel* m, mjData* d, const Overlay& overlay);
 
-  /// Waits until every queued frame is on disk. Returns false and sets *error (if
-  /// non-null) when a write failed. Further MaybeCapture calls are allowed afterwards.
+  /// Waits until every queued frame is on disk and, with a video, closes the stream and waits
+  /// for ffmpeg (video_message() says what it wrote). Returns false and sets *error (if
+  /// non-null) when a write or the video failed. Further MaybeCapture calls are allowed
+  /// afterwards for PNG files only (the video is complete).
   bool Finish(std::string* error);
+  /// After Finish: "video: wrote PATH (N frames, ...)" or why the video failed; "" without one.
+  const std::string& video_message() const { return video_message_; }
 
   /// Number of frame files written or queued so far (= index of the next frame).
   int64_t frame_count() const { return next_frame_; }
@@ -100,6 +111,8 @@ class FrameRecorder {
   RenderSettings settings_;
   std::unique_ptr<OffscreenRenderer> renderer_;
   std::unique_ptr<PngWriterQueue> writer_;
+  std::unique_ptr<VideoStream> video_;
+  std::string video_message_;
   int64_t next_frame_ = 0;
   double offset_ = 0;      // recording time minus simulated time, s
   double last_time_ = -1;  // d->time at the previous call (detects resets), s

@@ -18,8 +18,11 @@ namespace ddoc {
 /// azimuth and elevation.
 struct RenderSettings {
   /// Output directory for frame_000000.png, frame_000001.png, ...; created (with parents)
-  /// by Validate() when missing. Required.
+  /// by Validate() when missing. Empty: no PNG files (then `video` is required).
   std::string dir;
+  /// MP4 file the frames are streamed into through ffmpeg (VideoStream), no PNG needed; its
+  /// directory is created by Validate() when missing. Empty (default): no video.
+  std::string video;
   /// Image width in pixels, > 0 (at most kMaxImageSize).
   int width = 640;
   /// Image height in pixels, > 0 (at most kMaxImageSize).
@@ -69,9 +72,9 @@ struct RenderSettings {
   /// Largest accepted fps: beyond one frame per physics step frames only repeat, one file each.
   static constexpr double kMaxFps = 1000;
 
-  /// Checks every field and prepares the output directory: creates `dir` (and parents)
-  /// when missing and checks that a file can be created in it. Call it before the
-  /// simulation starts. Returns false and sets *error (if non-null) to a message naming
+  /// Checks every field and prepares the output directories: creates `dir` and the
+  /// directory of `video` (and parents) when missing and checks that a file can be created
+  /// in them. Call it before the simulation starts. Returns false and sets *error (if non-null) to a message naming
   /// the field, the expected range and the actual value, e.g.
   /// "render: width must be in [1, 8192] pixels, got -5" or
   /// "render: cannot create output directory 'f/frames': Not a directory" (f is a file).

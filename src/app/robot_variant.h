@@ -1,0 +1,44 @@
+// Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
+//
+// Robot variants from anywhere: a robot MJCF with its <include>s written into one file (absolute
+// include paths taken as they are, which MuJoCo 2.2 joins onto the model's directory), and the
+// numbers of a variant (ddoc-hopper --robot-variant mass=11,c_d=0.02) applied to it.
+#ifndef DDOC_APP_ROBOT_VARIANT_H_
+#define DDOC_APP_ROBOT_VARIANT_H_
+
+#include <optional>
+#include <string>
+
+namespace ddoc::app {
+
+/// The numbers of a robot variant (docs/hopper.md, "Robot variants"); unset: the robot file's.
+struct RobotVariant {
+  std::optional<double> mass;    ///< torso <inertial mass>, kg, > 0 (the variant files' M)
+  std::optional<double> j_body;  ///< torso diaginertia (all three), kg m^2, > 0
+  std::optional<double> c_d;     ///< <numeric name="drag_cd">, air drag of (38), kg/m, >= 0
+  std::optional<double> beta;    ///< <numeric name="vsa_beta">, stiffness bandwidth, rad/s, > 0
+  bool empty() const { return !mass && !j_body && !c_d && !beta; }
+  /// "mass=11,c_d=0.02" (the keys set, in this order).
+  std::string ToString() const;
+};
+
+/// Parses "KEY=VALUE,..." with keys mass, j_body, c_d, beta. Throws std::invalid_argument naming
+/// the flag (`flag`), the key or value and the bound ("--robot-variant: mass=-1, expected > 0").
+RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag);
+
+/// True when the MJCF `path` (or a file it includes) has an <include> that MuJoCo 2.2 would not
+/// find: an absolute path (MuJoCo joins it onto the model's directory) or a relative one missing
+/// from that directory (a variant copied out of models/). ExpandRobotMjcf resolves the first and
+/// names the second.
+bool IncludesNeedResolving(const std::string& path);
+
+/// The MJCF `path` as one self-contained text: every <include> replaced by the children of the
+/// included file's <mujoco> (a relative file= against the directory of `path`, as MuJoCo does; an
+/// absolute one as it is), then `variant` applied to the body "torso" and the <numeric>s. Throws
+/// std::runtime_error naming the file, line and what is wrong (an include not found says how a
+/// copied variant finds its includes); a file= of another element (assets) is not supported.
+std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant);
+
+}  // namespace ddoc::app
+
+#endif  // DDOC_APP_ROBOT_VARIANT_H_
