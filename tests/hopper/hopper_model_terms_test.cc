@@ -15,6 +15,7 @@
 #include "ddoc/hopper/hop_simulator.h"
 #include "ddoc/hopper/hopper_cost.h"
 #include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/nominal_gait.h"
 #include "flight_energy.h"
 
 namespace ddoc {
@@ -241,6 +242,36 @@ TEST(HopperModelTermsTest, BadValuesAreNamed) {
       EXPECT_NE(what.find(c.bound), std::string::npos) << what;
     }
   }
+}
+
+TEST(HopperModelTermsTest, TheNominalGaitOfAModelWithTermsStartsFromThePapersGait) {
+  // No constant input is periodic with a damper or a slope (before: "no periodic gait", I1 0.03-0.15,
+  // so no controller could be built on such a model). x0, u0 are the terms-free gait's; the hop is
+  // the full model's.
+  NominalGaitSettings gs;
+  gs.forward_speed = 1.0;
+  const NominalGait paper = FindNominalGait(HopperParams(), gs);
+  for (const HopperParams& p : {AllTerms(), [] {
+         HopperParams q;
+         q.b_leg = 4.0;
+         return q;
+       }()}) {
+    HopperParams no_terms = p;
+    no_terms.b_leg = no_terms.b_hip = no_terms.slope = 0.0;
+    const NominalGait g = FindNominalGait(p, gs);
+    const NominalGait g0 = FindNominalGait(no_terms, gs);
+    EXPECT_EQ(g.x0, g0.x0);
+    EXPECT_EQ(g.u0, g0.u0);
+    EXPECT_NE(g.hop.t2, g0.hop.t2);  // the full model's hop
+    HopSimSettings hs;
+    hs.dt = gs.dt;
+    const HopResult r = SimulateHop(HopperModel(p), g.x0, g.u0, hs);
+    EXPECT_EQ(g.T0(0), r.t1);
+    EXPECT_EQ(g.T0(1), r.t2);
+    EXPECT_GT(g.periodicity, g0.periodicity);
+  }
+  // Zero terms: the search itself, unchanged.
+  EXPECT_LT(paper.periodicity, 1e-15);
 }
 
 }  // namespace
