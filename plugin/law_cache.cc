@@ -29,7 +29,7 @@ constexpr std::uint32_t kFormat = 1;
 // A field added to one of these structs must be added to InitialLawKey below (or stated there as
 // not read by the model solve); the sizes are those of x86-64 with libstdc++.
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(HopperParams) == 64, "HopperParams changed: update InitialLawKey");
+static_assert(sizeof(HopperParams) == 88, "HopperParams changed: update InitialLawKey");
 static_assert(sizeof(HopperCostWeights) == 160, "HopperCostWeights changed: update InitialLawKey");
 static_assert(sizeof(NominalGaitSettings) == 56, "NominalGaitSettings changed: update the key");
 static_assert(sizeof(HopperModeDurations) == 32, "HopperModeDurations changed: update the key");
@@ -360,6 +360,10 @@ std::string InitialLawKey(const ControllerConfig& c) {
   k.D("model.beta", p.beta);
   k.D("model.g", p.g);
   k.I("model.impact", static_cast<int>(p.impact));
+  // Issue 44's terms, keyed only when on: at 0 they are the paper's model (old keys stay valid).
+  if (p.b_leg != 0.0) k.D("model.b_leg", p.b_leg);
+  if (p.b_hip != 0.0) k.D("model.b_hip", p.b_hip);
+  if (p.slope != 0.0) k.D("model.slope", p.slope);
   k.V("cost.q_diag", c.cost_weights.q_diag);
   k.V("cost.r_diag", c.cost_weights.r_diag);
   k.D("cost.energy_weight", c.cost_weights.energy_weight);

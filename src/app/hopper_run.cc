@@ -69,6 +69,9 @@ HopperParams ModelParams(const Scenario& s) {
   if (n.drag) p.c_d = *n.drag;
   if (n.beta) p.beta = *n.beta;
   if (n.gravity) p.g = *n.gravity;
+  if (n.b_leg) p.b_leg = *n.b_leg;
+  if (n.b_hip) p.b_hip = *n.b_hip;
+  if (n.slope) p.slope = *n.slope;
   p.Validate();
   return p;
 }

@@ -87,7 +87,9 @@ const std::vector<ElementSpec>& Elements() {
       {"model", false,
        {Text("mjcf"), Number("M", kPositive), Number("J_body", kPositive),
         Number("J_leg", kPositive), Number("r0", kPositive), Number("c_d", kNonNegative),
-        Number("beta", kPositive), Number("g", kPositive)}},
+        Number("beta", kPositive), Number("g", kPositive), Number("b_leg", kNonNegative),
+        Number("b_hip", kNonNegative),
+        Number("slope", {-HopperParams::kMaxSlope, HopperParams::kMaxSlope, true, true})}},
       {"method", false, {Text("name")}},
       {"duration", false, {Integer("hops", 0), Number("seconds", kNonNegative)}},
       {"push", true,
@@ -260,6 +262,9 @@ void ParseModel(const std::string& path, const Element* e, Scenario* s) {
   n.drag = GetNumber(path, e, "c_d");
   n.beta = GetNumber(path, e, "beta");
   n.gravity = GetNumber(path, e, "g");
+  n.b_leg = GetNumber(path, e, "b_leg");
+  n.b_hip = GetNumber(path, e, "b_hip");
+  n.slope = GetNumber(path, e, "slope");
 }
 
 void ParseLearning(const std::string& path, const Element* e, LearningOverrides* l) {

@@ -35,6 +35,9 @@ struct ModelNumbers {
   std::optional<double> drag;     // c_d [kg/m]
   std::optional<double> beta;     // VSA bandwidth [rad/s]
   std::optional<double> gravity;  // g [m/s^2]
+  std::optional<double> b_leg;    // leg damping [N s/m]
+  std::optional<double> b_hip;    // hip damping [N m s/rad]
+  std::optional<double> slope;    // floor slope [rad], > 0 rises towards +x
 };
 
 /// Algorithm 1 settings a scenario may override (LearnerSettings; unset = the plugin default).

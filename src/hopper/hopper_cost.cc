@@ -83,7 +83,7 @@ HopperCostTerms HopperCost::Terms(const ConstVectorRef& x_td, const ConstVectorR
   t.i1 = Switching(hopper::kStance, x_to);
   t.i2 = effort_integral;
   t.i3 = Switching(hopper::kFlight, x_td);
-  const double yf = HopperModel::FootHeight(x_td);
+  const double yf = model_.FootClearance(x_td);  // the foot height on a level floor
   t.i4 = weights_.surface_weight * yf * yf;
   return t;
 }

@@ -38,6 +38,14 @@ void HopperParams::Validate() const {
   CheckPositive("c_d", c_d, /*allow_zero=*/true);
   CheckPositive("beta", beta);
   CheckPositive("g", g);
+  CheckPositive("b_leg", b_leg, /*allow_zero=*/true);
+  CheckPositive("b_hip", b_hip, /*allow_zero=*/true);
+  if (!(std::abs(slope) < kMaxSlope)) {
+    std::ostringstream os;
+    os << "HopperParams: slope = " << slope << " rad, expected a finite value with |slope| < "
+       << kMaxSlope << " rad";
+    throw InvalidArgument(os.str());
+  }
 }
 
 void HopperParams::CheckRk4Step(double dt, const std::string& who) const {
@@ -98,6 +106,15 @@ double HopperModel::FootHeight(const ConstVectorRef& x) {
   return x(hopper::kY) - x(hopper::kR) * std::cos(x(hopper::kTheta));
 }
 
+double HopperModel::FootClearance(const ConstVectorRef& x_flight) const {
+  if (x_flight.size() != hopper::kFlightDim) {
+    throw InvalidArgument("FootClearance: x has size " + std::to_string(x_flight.size()) +
+                          ", expected 14");
+  }
+  const Eigen::Matrix<double, 14, 1> x = x_flight;
+  return Clearance<double>(x);
+}
+
 double HopperModel::Guard(int k, const ConstVectorRef& x, const ConstVectorRef& u) const {
   if (k < 0 || k > 1 || x.size() != state_dim(k) || u.size() != hopper::kInputDim) {
     std::ostringstream os;
@@ -105,8 +122,10 @@ double HopperModel::Guard(int k, const ConstVectorRef& x, const ConstVectorRef& 
        << u.size() << ", expected k in {0,1}, x of size n_k, u of size 4";
     throw InvalidArgument(os.str());
   }
-  if (k == hopper::kFlight) return FootHeight(x);
-  return u(hopper::kF0) - x(hopper::kSKleg) * (x(hopper::kSR) - params_.r0);
+  if (k == hopper::kFlight) return FootClearance(x);
+  double force = u(hopper::kF0) - x(hopper::kSKleg) * (x(hopper::kSR) - params_.r0);
+  if (params_.b_leg != 0.0) force -= params_.b_leg * x(hopper::kSRd);
+  return force;
 }
 
 void HopperModel::TakeoffMap(const ConstVectorRef& x_stance, double foot_x,
@@ -203,7 +222,7 @@ void HopperModel::DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx
 
 void HopperModel::DoSurface(int k, const ConstVectorRef& x, VectorRef h) const {
   (void)k;  // only mode 0 has a surface (s_0 = 1, s_1 = 0)
-  h(0) = FootHeight(x);
+  h(0) = FootClearance(x);
 }
 
 void HopperModel::DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const {
@@ -213,6 +232,16 @@ void HopperModel::DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef 
   hx(0, hopper::kY) = 1.0;
   hx(0, hopper::kR) = -std::cos(x(hopper::kTheta));
   hx(0, hopper::kTheta) = x(hopper::kR) * std::sin(x(hopper::kTheta));
+  const double a = params_.slope;
+  if (a != 0.0) {
+    // h_0 = cos(a) y_f - sin(a) x_f, x_f = x + r sin(theta): d/dx = -sin(a), d/dy = cos(a),
+    // d/dr = -cos(theta - a), d/dtheta = r sin(theta - a).
+    const double th = x(hopper::kTheta);
+    hx(0, hopper::kX) = -std::sin(a);
+    hx(0, hopper::kY) = std::cos(a);
+    hx(0, hopper::kR) = -std::cos(th - a);
+    hx(0, hopper::kTheta) = x(hopper::kR) * std::sin(th - a);
+  }
 }
 
 bool HopperModel::DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
@@ -226,6 +255,7 @@ bool HopperModel::DoGuardGradient(int k, const ConstVectorRef& x, const ConstVec
   hx.setZero();
   hx(hopper::kSR) = -x(hopper::kSKleg);
   hx(hopper::kSKleg) = -(x(hopper::kSR) - params_.r0);
+  hx(hopper::kSRd) = -params_.b_leg;
   return true;
 }
 
@@ -241,5 +271,6 @@ template void HopperModel::TouchdownReset<double>(const Eigen::Matrix<double, 14
 template void HopperModel::TakeoffReset<double>(const Eigen::Matrix<double, 10, 1>&,
                                                 const double&, Eigen::Matrix<double, 14, 1>*) const;
 template double HopperModel::EnergyLoss<double>(const Eigen::Matrix<double, 14, 1>&) const;
+template double HopperModel::Clearance<double>(const Eigen::Matrix<double, 14, 1>&) const;
 
 }  // namespace ddoc

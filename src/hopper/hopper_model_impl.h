@@ -19,7 +19,8 @@ void HopperModel::FlightRhs(const Eigen::Matrix<T, 14, 1>& x, const Eigen::Matri
   using namespace hopper;  // NOLINT
   using std::abs;
   const HopperParams& p = params_;
-  const T tau = u(kTau0) - x(kKhip) * (x(kPhi) - x(kTheta));
+  T tau = u(kTau0) - x(kKhip) * (x(kPhi) - x(kTheta));
+  if (p.b_hip != 0.0) tau -= p.b_hip * (x(kPhid) - x(kThetad));  // hip damper (0: the paper)
   const double b = p.beta;
   // Positions and stiffnesses integrate their rates.
   for (int i = 0; i < 7; ++i) (*xdot)(i) = x(7 + i);
@@ -43,8 +44,10 @@ void HopperModel::StanceRhs(const Eigen::Matrix<T, 10, 1>& x, const Eigen::Matri
   const T& r = x(kSR);
   const T& thd = x(kSThetad);
   const T& rd = x(kSRd);
-  const T tau = u(kTau0) - x(kSKhip) * (x(kSPhi) - th);
-  const T force = u(kF0) - x(kSKleg) * (r - p.r0);
+  T tau = u(kTau0) - x(kSKhip) * (x(kSPhi) - th);
+  if (p.b_hip != 0.0) tau -= p.b_hip * (x(kSPhid) - thd);  // hip damper (0: the paper)
+  T force = u(kF0) - x(kSKleg) * (r - p.r0);
+  if (p.b_leg != 0.0) force -= p.b_leg * rd;  // leg damper (0: the paper)
   const double b = p.beta;
   for (int i = 0; i < 5; ++i) (*xdot)(i) = x(5 + i);
   (*xdot)(kSThetad) = (p.M * (r * p.g * sin(th) - 2.0 * r * rd * thd) - tau) /
@@ -100,6 +103,7 @@ void HopperModel::TakeoffReset(const Eigen::Matrix<T, 10, 1>& xs, const T& foot_
   const T s = sin(th);
   (*x)(kX) = foot_x - r * s;
   (*x)(kY) = r * c;
+  if (params_.slope != 0.0) (*x)(kY) += foot_x * std::tan(params_.slope);  // foot on the slope
   (*x)(kTheta) = th;
   (*x)(kPhi) = xs(kSPhi);
   (*x)(kR) = r;
@@ -112,6 +116,17 @@ void HopperModel::TakeoffReset(const Eigen::Matrix<T, 10, 1>& xs, const T& foot_
   (*x)(kRd) = T(0.0) * rd;  // the massless leg stops extending when it leaves the ground
   (*x)(kKhipd) = xs(kSKhipd);
   (*x)(kKlegd) = xs(kSKlegd);
+}
+
+template <typename T>
+T HopperModel::Clearance(const Eigen::Matrix<T, 14, 1>& x) const {
+  using namespace hopper;  // NOLINT
+  using std::cos;
+  using std::sin;
+  const T yf = x(kY) - x(kR) * cos(x(kTheta));
+  if (params_.slope == 0.0) return yf;  // the paper's level floor, bit for bit
+  const T xf = x(kX) + x(kR) * sin(x(kTheta));
+  return std::cos(params_.slope) * yf - std::sin(params_.slope) * xf;
 }
 
 template <typename T>

@@ -116,7 +116,16 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
     throw InvalidArgument("FindNominalGait: need apex_height > r0 (" +
                           std::to_string(s.apex_height) + "), dt > 0, continuation_stages >= 1");
   }
-  const HopperModel model(params);
+  // With the dampers or a slope (issue 44) no constant input is periodic: the dampers take energy
+  // out of every hop and the slope puts M g step tan(alpha) in. The search runs on the model
+  // without them (the paper's); its x0, u0 are then simulated on the full model below.
+  HopperParams search_params = params;
+  search_params.b_leg = 0.0;
+  search_params.b_hip = 0.0;
+  search_params.slope = 0.0;
+  const bool has_terms = params.b_leg != 0.0 || params.b_hip != 0.0 || params.slope != 0.0;
+  const HopperModel model(search_params);
+  const HopperModel full_model(params);
   const HopperCostWeights w;
   // Start from vertical hopping in place (exactly periodic: theta = 0 gives v_f_theta = 0) and
   // ramp the forward speed, re-solving at each stage.
@@ -145,15 +154,26 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
   if (!g.hop.ok) {
     throw InvalidArgument("FindNominalGait: the final hop failed (" + g.hop.message + ")");
   }
-  g.T0 << g.hop.t1, g.hop.t2;
   HopperCost cost(model, w);
   cost.SetReference(g.x0);
   g.periodicity = cost.Switching(hopper::kStance, g.hop.x_to_minus);
-  if (!(g.periodicity <= s.max_periodicity)) {
+  const double search_periodicity = g.periodicity;
+  if (has_terms) {  // the hop, times and residual of the full model
+    g.hop = SimulateHop(full_model, g.x0, g.u0, hs);
+    if (!g.hop.ok) {
+      throw InvalidArgument("FindNominalGait: the hop with b_leg, b_hip, slope failed (" +
+                            g.hop.message + ")");
+    }
+    HopperCost full_cost(full_model, w);
+    full_cost.SetReference(g.x0);
+    g.periodicity = full_cost.Switching(hopper::kStance, g.hop.x_to_minus);
+  }
+  g.T0 << g.hop.t1, g.hop.t2;
+  if (!(search_periodicity <= s.max_periodicity)) {
     std::ostringstream msg;
     msg << "FindNominalGait: no periodic gait at " << s.forward_speed << " m/s (apex "
         << s.apex_height << " m, k0_hip " << s.k0_hip << ", k0_leg " << s.k0_leg
-        << "): the search ends at I1 = " << g.periodicity << ", above " << s.max_periodicity
+        << "): the search ends at I1 = " << search_periodicity << ", above " << s.max_periodicity
         << "; a lower speed may have one";
     throw InvalidArgument(msg.str());
   }
@@ -165,7 +185,7 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
   g.period = g.hop.t2;
   g.forward_speed = g.x0(hopper::kXd);
   g.step_length = g.hop.x_to_plus(hopper::kX) - g.x0(hopper::kX);
-  g.energy_loss = model.ImpactEnergyLoss(g.hop.x_td_minus);
+  g.energy_loss = full_model.ImpactEnergyLoss(g.hop.x_td_minus);
   return g;
 }
 

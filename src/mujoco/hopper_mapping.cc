@@ -135,6 +135,41 @@ HopperMapping HopperMapping::Build(const mjModel* m, const std::string& source,
   if (m->geom_bodyid[map.geom_foot] != map.body_foot) {
     Fail(source, "geom 'foot' must belong to body 'foot'");
   }
+  // The floor: a plane of the world body, level or turned about y only (the plane of motion is
+  // x-z). Its normal n = R (0, 0, 1) = (-sin alpha, 0, cos alpha).
+  if (m->geom_type[map.geom_floor] != mjGEOM_PLANE || m->geom_bodyid[map.geom_floor] != 0) {
+    Fail(source, "geom 'floor' must be a plane of the worldbody");
+  }
+  {
+    const mjtNum* fq = m->geom_quat + 4 * map.geom_floor;
+    mjtNum normal[3];
+    const mjtNum up[3] = {0.0, 0.0, 1.0};
+    mju_rotVecQuat(normal, up, fq);
+    if (std::abs(normal[1]) > 1e-9 || !(normal[2] > 0.0)) {
+      std::ostringstream os;
+      os << "geom 'floor' has normal (" << normal[0] << " " << normal[1] << " " << normal[2]
+         << "), expected (-sin alpha, 0, cos alpha) with cos alpha > 0: a floor turned about y only";
+      Fail(source, os.str());
+    }
+    map.floor_slope = std::atan2(-normal[0], normal[2]);
+    if (map.floor_slope != 0.0) {
+      // The model's floor line passes through the origin: the foot-centre surface, the plane
+      // moved out by the foot radius, must contain (0, 0, 0).
+      const mjtNum* fp = m->geom_pos + 3 * map.geom_floor;
+      const double radius = m->geom_size[3 * map.geom_foot];
+      const double offset = -(normal[0] * fp[0] + normal[1] * fp[1] + normal[2] * fp[2]) - radius;
+      if (std::abs(offset) > 1e-6) {
+        std::ostringstream os;
+        os << "the tilted geom 'floor' (slope " << map.floor_slope << " rad) puts the foot-centre "
+           << "surface " << offset << " m from the origin, expected 0 (pos = foot radius * (sin "
+           << "alpha, 0, -cos alpha) = (" << radius * std::sin(map.floor_slope) << " 0 "
+           << -radius * std::cos(map.floor_slope) << "))";
+        Fail(source, os.str());
+      }
+    }
+  }
+  map.leg_damping = m->dof_damping[map.dof_leg];
+  map.hip_damping = m->dof_damping[map.dof_hip];
   // Masses and inertias (MuJoCo's compiler already rejects most, but name them clearly).
   for (int b : {map.body_torso, map.body_leg, map.body_foot}) {
     const char* bn = mj_id2name(m, mjOBJ_BODY, b);
@@ -203,6 +238,30 @@ void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& m
          << "sqrt(k / I) * timestep = " << ratio << " with I = " << inertia << " ("
          << sp.inertia_unit << "), and the explicit spring grows from 2 on; use a timestep below "
          << 2.0 * std::sqrt(inertia / sp.k_max) << " s";
+      Fail(source, os.str());
+    }
+  }
+  // Joint damping (issue 44's leg and hip dampers), integrated implicitly by MuJoCo's Euler, on a
+  // light joint: the contact solver does not see it, and from damping * timestep / I ~ 1.6 on the
+  // foot (2 g) chatters on the floor in stance (measured on hopper_damped_leg.xml at 1 m/s:
+  // b_leg = 6 N s/m, ratio 1.50, hops; 7 N s/m, ratio 1.75, five false takeoffs in one stance).
+  constexpr double kMaxDampingRatio = 1.5;
+  for (const Spring& sp : springs) {
+    const double b = m->dof_damping[sp.dof];
+    if (b == 0.0) continue;
+    std::fill(e.begin(), e.end(), 0.0);
+    e[static_cast<size_t>(sp.dof)] = 1.0;
+    mj_solveM(m, d.get(), minv_e.data(), e.data(), 1);
+    const double inertia = 1.0 / minv_e[static_cast<size_t>(sp.dof)];
+    const double ratio = b * m->opt.timestep / inertia;
+    if (!(ratio < kMaxDampingRatio)) {
+      std::ostringstream os;
+      os << "damping " << b << " of joint '" << mj_id2name(m, mjOBJ_JOINT, m->dof_jntid[sp.dof])
+         << "' is too strong for its " << inertia << " (" << sp.inertia_unit << ") at timestep "
+         << m->opt.timestep << " s: damping * timestep / I = " << ratio
+         << ", and the foot chatters on the floor from " << kMaxDampingRatio
+         << " on; use a damping below " << kMaxDampingRatio * inertia / m->opt.timestep
+         << " or a timestep below " << kMaxDampingRatio * inertia / b << " s";
       Fail(source, os.str());
     }
   }
@@ -287,6 +346,7 @@ void WriteStanceState(const HopperMapping& map, const double* xs, double foot_x,
   double f[14];
   f[0] = foot_x - r * s;
   f[1] = r * c;
+  if (map.floor_slope != 0.0) f[1] += foot_x * std::tan(map.floor_slope);  // foot on the slope
   for (int i = 0; i < 5; ++i) {
     f[2 + i] = xs[i];
     f[9 + i] = xs[5 + i];

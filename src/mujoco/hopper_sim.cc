@@ -38,6 +38,9 @@ HopperParams HopperParamsFromModel(const mjModel* m, const std::string& source) 
   p.c_d = map.drag_cd;
   p.beta = map.beta;
   p.g = -m->opt.gravity[2];
+  p.b_leg = map.leg_damping;
+  p.b_hip = map.hip_damping;
+  p.slope = map.floor_slope;
   p.impact = ImpactModel::kMasslessLeg;
   try {
     p.Validate();

@@ -427,5 +427,19 @@ TEST(RunLogTest, AcceptedCountsLearningTrialsOnly) {
   EXPECT_EQ(ocfb.rejected, 0);
 }
 
+// Issue 44: the model terms robots have, as <model> attributes; bad values name the bound.
+TEST_F(ScenarioTest, ModelDampingAndSlopeAttributes) {
+  const char* body = "<ddoc_scenario>\n<robot mjcf='robot.xml'/>\n%s\n</ddoc_scenario>";
+  const Scenario s =
+      LoadScenario(Write(Fill(body, "<model b_leg='20' b_hip='0.5' slope='-0.035'/>")));
+  ASSERT_TRUE(s.model_numbers.b_leg && s.model_numbers.b_hip && s.model_numbers.slope);
+  EXPECT_DOUBLE_EQ(*s.model_numbers.b_leg, 20.0);
+  EXPECT_DOUBLE_EQ(*s.model_numbers.b_hip, 0.5);
+  EXPECT_DOUBLE_EQ(*s.model_numbers.slope, -0.035);
+  ExpectError(Fill(body, "<model b_leg='-1'/>"), {"s.xml:3", "<model>", "b_leg = -1", ">= 0"});
+  ExpectError(Fill(body, "<model b_hip='-0.5'/>"), {"s.xml:3", "b_hip = -0.5", ">= 0"});
+  ExpectError(Fill(body, "<model slope='0.6'/>"), {"s.xml:3", "slope = 0.6", "(-0.5, 0.5)"});
+}
+
 }  // namespace
 }  // namespace ddoc::app

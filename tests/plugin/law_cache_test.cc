@@ -106,6 +106,9 @@ TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
   std::vector<std::pair<const char*, void (*)(ControllerConfig*)>> changes = {
       {"model.M", [](ControllerConfig* c) { c->model.M = 10.0 + 1e-12; }},
       {"model.c_d", [](ControllerConfig* c) { c->model.c_d = 0.01; }},
+      {"model.b_leg", [](ControllerConfig* c) { c->model.b_leg = 20.0; }},
+      {"model.b_hip", [](ControllerConfig* c) { c->model.b_hip = 0.5; }},
+      {"model.slope", [](ControllerConfig* c) { c->model.slope = -0.03; }},
       {"cost.q_diag", [](ControllerConfig* c) { c->cost_weights.q_diag(8) = 11.0; }},
       {"gait.forward_speed", [](ControllerConfig* c) { c->gait.forward_speed = 0.3; }},
       {"durations.stance_max", [](ControllerConfig* c) { c->durations.stance_max = 0.9; }},

@@ -64,6 +64,18 @@ struct HopperParams {
   double c_d = 0.0;      ///< air drag, kg/m (>= 0); force -c_d v|v| per component, eq. (38)
   double beta = kDefaultVsaBeta;  ///< VSA stiffness bandwidth, rad/s (> 0)
   double g = 9.81;       ///< gravity, m/s^2 (> 0)
+  /// Viscous damping of the leg, N s/m (>= 0; default 0 = the paper): a force -b_leg rd along
+  /// the leg in stance, F = F0 - k_leg (r - r0) - b_leg rd (MJCF: damping of joint "leg").
+  double b_leg = 0.0;
+  /// Viscous damping of the hip, N m s/rad (>= 0; default 0 = the paper): a torque on the
+  /// relative rate, tau = tau0 - k_hip (phi - theta) - b_hip (phid - thetad) (MJCF: joint "hip").
+  double b_hip = 0.0;
+  /// Floor slope alpha, rad (|alpha| < kMaxSlope; default 0 = the paper): the foot-centre floor is
+  /// the line y = x tan(alpha) through the origin (alpha > 0 rises towards +x, i.e. uphill for
+  /// forward hopping). Gravity stays vertical.
+  double slope = 0.0;
+  /// Largest accepted |slope|, rad (0.5 rad = 28.6 deg; the robot's leg reaches ~0.3 rad).
+  static constexpr double kMaxSlope = 0.5;
   ImpactModel impact = ImpactModel::kMasslessLeg;  ///< touchdown reset variant
 
   /// Throws ddoc::InvalidArgument naming the first bad field (expected vs actual).
@@ -81,8 +93,12 @@ struct HopperParams {
 ///               phidd = tau/J_body,  rdd = 0.
 /// Stance (39):  thetadd = [M (r g sin theta - 2 r rd thetad) - tau] / (J_leg + M r^2),
 ///               phidd = tau/J_body,  rdd = r thetad^2 - g cos theta + F/M.
-/// VSA (both):   tau = tau0 - k_hip (phi - theta),  F = F0 - k_leg (r - r0),
+/// VSA (both):   tau = tau0 - k_hip (phi - theta) - b_hip (phid - thetad),
+///               F = F0 - k_leg (r - r0) - b_leg rd,
 ///               kdd_i = beta^2 (k0_i - k_i) - 2 beta kd_i.
+///               (b_hip, b_leg: the dampers of HopperParams, 0 in the paper. F enters stance only,
+///               flight keeps rdd = 0. The slope changes only the floor: h_0 and g_1 below; the
+///               stance and touchdown equations hold as they are, the foot being a fixed pivot.)
 /// Touchdown g_0 (40): v = xd cos th + yd sin th + r thd (foot velocity normal to the leg),
 ///               eps = J / (J + M r^2), J = J_leg (kMasslessLeg) or J_body and r -> r0 (literal):
 ///               thd+ = thd - eps (M r / J) v,  rd+ = -xd sin th + yd cos th (foot stops),
@@ -92,7 +108,11 @@ struct HopperParams {
 ///               x = x_f - r sin th, y = r cos th, xd = -rd sin th - r thd cos th,
 ///               yd = rd cos th - r thd sin th, rd+ = 0 (the massless leg stops extending at
 ///               F_leg = 0 and stays at its length during flight, consistent with rdd = 0).
-/// Switching surface h_0 (s_0 = 1): foot height y_f = y - r cos theta (the I4 penalty of (42)).
+///               With a slope the foot is at (x_f, x_f tan(alpha)): y = x_f tan(alpha) + r cos th
+///               (the cycle reset, x_f = 0, keeps the foothold at the origin, on the floor line).
+/// Switching surface h_0 (s_0 = 1): the foot's distance above the floor line,
+///               h_0 = cos(alpha) y_f - sin(alpha) x_f with (x_f, y_f) = (x + r sin th, y - r cos th)
+///               (= the foot height y_f at alpha = 0; the I4 penalty of (42)).
 /// Derivatives: Eigen AutoDiff with fixed sizes (allocation-free).
 class HopperModel : public SwitchedSystem {
  public:
@@ -101,8 +121,9 @@ class HopperModel : public SwitchedSystem {
   const HopperParams& params() const { return params_; }
 
   /// Guard of the model plant (events are sign changes from > 0 to <= 0):
-  ///   k = 0 (flight): foot height y_f = y - r cos theta; touchdown when it reaches 0 descending.
-  ///   k = 1 (stance): leg force F_leg = F0 - k_leg (r - r0); takeoff when it reaches 0.
+  ///   k = 0 (flight): FootClearance (the foot height y - r cos theta on a level floor);
+  ///                   touchdown when it reaches 0 descending.
+  ///   k = 1 (stance): leg force F_leg = F0 - k_leg (r - r0) - b_leg rd; takeoff when it reaches 0.
   double Guard(int k, const ConstVectorRef& x, const ConstVectorRef& u) const;
 
   /// Energy loss (41) at touchdown for the pre-impact flight state x^-:
@@ -117,6 +138,9 @@ class HopperModel : public SwitchedSystem {
   static double FootX(const ConstVectorRef& x_flight);
   /// Foot height y - r cos theta (flight state).
   static double FootHeight(const ConstVectorRef& x_flight);
+  /// The foot's distance above the (sloped) floor, h_0 = cos(alpha) y_f - sin(alpha) x_f, m;
+  /// equal to FootHeight at slope 0 (flight state).
+  double FootClearance(const ConstVectorRef& x_flight) const;
 
   /// Templated right-hand sides shared by the double and AutoDiff paths. Sizes: x 14 / 10, u 4.
   /// Defined in src/hopper; instantiated for double (usable anywhere) and for the AutoDiff types
@@ -134,6 +158,9 @@ class HopperModel : public SwitchedSystem {
                     Eigen::Matrix<T, 14, 1>* x) const;
   template <typename T>
   T EnergyLoss(const Eigen::Matrix<T, 14, 1>& x) const;
+  /// h_0 of a flight state: the foot's distance above the floor line (FootClearance).
+  template <typename T>
+  T Clearance(const Eigen::Matrix<T, 14, 1>& x) const;
 
  protected:
   void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
@@ -144,7 +171,8 @@ class HopperModel : public SwitchedSystem {
   void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const override;
   void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override;
   void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const override;
-  /// d Guard / dx: flight, the foot height's gradient; stance, -k_leg on r and -(r - r0) on k_leg.
+  /// d Guard / dx: flight, the clearance's gradient; stance, -k_leg on r, -(r - r0) on k_leg and
+  /// -b_leg on rd.
   bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
                        VectorRef hx) const override;
 

@@ -48,6 +48,10 @@ struct NominalGait {
 /// redone with yd0 held at its initial value.
 /// A constant-input hop is conservative except for the touchdown loss (41), so exact periodicity
 /// needs v_f_theta = 0 at touchdown; the residual left is reported in the result.
+/// With b_leg, b_hip or slope nonzero no constant input is periodic (the dampers dissipate, a
+/// slope adds M g step tan(alpha) per hop): the search then runs on params without them, and
+/// x0, u0 are that gait's while hop, T0, periodicity and the figures below are of the full model
+/// under u0 (a start for the model solve, which has the terms). At zero terms nothing changes.
 /// Throws ddoc::InvalidArgument for invalid params/settings, and when the search ends at
 /// I1 > max_periodicity: no periodic gait at that speed (e.g. 2.7 m/s and more on the 10 kg model).
 NominalGait FindNominalGait(const HopperParams& params,

@@ -67,6 +67,12 @@ struct HopperMapping {
   double r0 = 0.7;         ///< natural leg length: distance hip -> foot body at qpos[leg] = 0
   double drag_cd = 0.0;    ///< c_d from <numeric name="drag_cd">, kg/m
   double beta = kDefaultVsaBeta;  ///< from <numeric name="vsa_beta">, rad/s
+  double leg_damping = 0.0;  ///< damping of joint "leg" (dof_damping), N s/m: HopperParams::b_leg
+  double hip_damping = 0.0;  ///< damping of joint "hip" (dof_damping), N m s/rad: HopperParams::b_hip
+  /// Floor slope alpha, rad (HopperParams::slope): the plane "floor" turned about y, normal
+  /// (-sin alpha, 0, cos alpha); alpha > 0 rises towards +x. A tilted floor must put the
+  /// foot-centre surface through the origin (plane pos = foot radius * (sin alpha, 0, -cos alpha)).
+  double floor_slope = 0.0;
   double timestep = 0.0;   ///< m->opt.timestep
 
   static HopperMapping Build(const mjModel* m, const std::string& source = "<mjModel>",
@@ -78,7 +84,8 @@ struct HopperMapping {
 /// joint's effective inertia I (1 / (M^-1)_jj at qpos0, the other joints free) grows once
 /// sqrt(k / I) * timestep >= 2. Throws HopperSimError naming the joint, the ratio and the largest
 /// stable timestep for the leg (k_leg up to 2350 N/m on the foot) and the hip (k_hip up to
-/// 150 N m/rad).
+/// 150 N m/rad). Likewise for a joint damping b on "leg" or "hip" once b * timestep / I >= 1.5
+/// (the foot chatters on the floor; the leg's I is the 2 g foot: b_leg < 6 N s/m at 0.5 ms).
 void CheckSpringsAreStableAtTheTimestep(const mjModel* m, const HopperMapping& map,
                                         const std::string& source);
 
@@ -96,8 +103,9 @@ Eigen::Vector2d FootPosition(const HopperMapping& map, const mjData* d);
 
 /// Writes qpos/qvel from a flight state (14); the VSA part is returned in *vsa (may be null).
 void WriteFlightState(const HopperMapping& map, const double* x, mjData* d, VsaState* vsa);
-/// Writes qpos/qvel from a stance state (10) with the foot centre at (foot_x, 0):
-/// x = foot_x - r sin theta, y = r cos theta, xd = -rd sin th - r thd cos th,
+/// Writes qpos/qvel from a stance state (10) with the foot centre on the floor at foot_x, i.e. at
+/// (foot_x, foot_x tan(floor_slope)): x = foot_x - r sin theta, y = foot_x tan(floor_slope) +
+/// r cos theta, xd = -rd sin th - r thd cos th,
 /// yd = rd cos th - r thd sin th (the foot at rest).
 void WriteStanceState(const HopperMapping& map, const double* x, double foot_x, mjData* d,
                       VsaState* vsa);

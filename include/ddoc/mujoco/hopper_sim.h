@@ -26,7 +26,8 @@ namespace ddoc {
 ///   J_body = torso inertia about the y axis
 ///   J_leg  = inertia of leg + foot about the hip axis at r = r0 (leg I_yy + foot I_yy + m_f r0^2)
 ///   r0     = hip-to-foot distance at joint "leg" = 0;  c_d = <numeric drag_cd> (0 if absent);
-///   beta   = <numeric vsa_beta> (20 if absent);  g = -opt.gravity[2];  impact = kMasslessLeg.
+///   beta   = <numeric vsa_beta> (20 if absent);  g = -opt.gravity[2];  impact = kMasslessLeg;
+///   b_leg, b_hip = damping of joints "leg", "hip";  slope = the floor plane's tilt about y.
 HopperParams LoadHopperParamsFromMjcf(const std::string& path);
 /// The same from an already loaded model (source names it in errors).
 HopperParams HopperParamsFromModel(const mjModel* m, const std::string& source);
