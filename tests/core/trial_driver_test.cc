@@ -394,6 +394,31 @@ TEST_F(TrialDriverTest, RemeasuringAtIterationZeroRunsTheInitialLaw) {
   EXPECT_EQ(driver.learner()->iteration(), 0);
 }
 
+// After accepted iterations a terminated learner's law is the one that produced the last
+// accepted trial (Learner::NextTrial's replay), not u^0: the driver falls back to u^0 only at
+// iteration 0. On this deterministic plant the replay reproduces the nominal's cost.
+TEST_F(TrialDriverTest, TerminationAfterAcceptedTrialsReplaysTheLastAcceptedLaw) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.learner.alpha_min = 0.3;  // two rejections in a row terminate
+  settings.learner.alpha_after_accept = AlphaAfterAccept::kReset;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  int trials = 0;
+  while (driver.learner()->status() != LearnerStatus::kLineSearchFailed && trials < 500) {
+    driver.RunTrial(plant, lq.x0, &measured);
+    ++trials;
+  }
+  ASSERT_EQ(driver.learner()->status(), LearnerStatus::kLineSearchFailed);
+  ASSERT_GT(driver.learner()->iteration(), 3);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_FALSE(driver.runs_fallback()) << "replay " << i;
+    const TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+    EXPECT_FALSE(o.ran_fallback) << "replay " << i;
+    EXPECT_NEAR(o.cost, driver.learner()->nominal_cost(), 1e-9 * driver.learner()->nominal_cost())
+        << "replay " << i;
+  }
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc
