@@ -751,6 +751,58 @@ TEST(BackwardPass, RejectsMismatchedTrajectories) {
   EXPECT_THROW(pass.Run(two), InvalidArgument);  // K = 2
 }
 
+// The on-bound tolerance of the box-aware pass (kOnBoundTolerance), on both bounds. A pure
+// integrator with a terminal cost (a = q = 0: p = s x(T) along the nominal) has a constant
+// optimal input u* = -b s x0 / (r + b^2 s T). The nominal u0 = u* -/+ delta lies 1e-9 inside
+// u_max (resp. u_min), within the tolerance 1e-9 x range, and the gradient pushes it out by a
+// full step between delta and (1 + b^2 s T / r) delta = 8.2 delta, smaller than the 1e-9 gap:
+// only the tolerance makes the input count as on its bound, so its step and gain row are zero
+// (a free input would get two-sided feedback that the plant's QP clips on one side). With the
+// bound far away the same nominal's input is free and has feedback.
+TEST(BackwardPass, AnInputARoundingErrorInsideItsBoundHasNoGain) {
+  ScalarLq lq;
+  lq.a = 0.0;
+  lq.q = 0.0;
+  const double u_star = -lq.b * lq.s * lq.x0 / (lq.r + lq.b * lq.b * lq.s * lq.T);
+  const double delta = 1e-11, gap = 1e-9;
+  const int N = 241;
+  for (const bool upper : {true, false}) {
+    lq.u0 = upper ? u_star - delta : u_star + delta;
+    ScalarLqSetup setup{lq};
+    Trajectory traj;
+    traj.modes.resize(1);
+    ModeTrajectory& mode = traj.modes[0];
+    mode.t = Vector::LinSpaced(N, 0.0, lq.T);
+    mode.x = (lq.x0 + lq.b * lq.u0 * mode.t.array()).matrix().transpose();
+    mode.u = Matrix::Constant(1, N, lq.u0);
+    traj.T = Vector::Constant(1, lq.T);
+    traj.x0 = mode.x.col(0);
+    BackwardPass free_pass;
+    free_pass.Allocate(setup.problem, N, BackwardPassSettings());
+    free_pass.Run(traj);
+    for (int j : {0, 120, N - 2}) {
+      const double k = free_pass.Step(0, j)(0);
+      // The step pushes out of the box, by less than the gap to the bound.
+      EXPECT_GT(upper ? k : -k, 0.5 * delta) << "upper " << upper << " j " << j;
+      EXPECT_LT(upper ? k : -k, 0.2 * gap) << "upper " << upper << " j " << j;
+      EXPECT_GT(free_pass.Gain(0, j).norm(), 0.1) << "far from its bounds the input has feedback";
+    }
+    if (upper) {
+      setup.problem.bounds.u_max(0) = lq.u0 + gap;
+    } else {
+      setup.problem.bounds.u_min(0) = lq.u0 - gap;
+    }
+    BackwardPass pass;
+    pass.Allocate(setup.problem, N, BackwardPassSettings());
+    pass.Run(traj);
+    for (int j = 0; j + 1 < N; ++j) {
+      EXPECT_EQ(pass.Step(0, j)(0), 0.0) << (upper ? "u_max" : "u_min") << " j " << j;
+      EXPECT_EQ(pass.Gain(0, j).norm(), 0.0)
+          << "an input 1e-9 inside " << (upper ? "u_max" : "u_min") << " keeps feedback at j " << j;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

@@ -465,6 +465,62 @@ TEST(OnlineController, ImportLawNamesTheBadFieldAndKeepsTheLoadedLaw) {
   ExpectSameSteps(s, target, reference);  // every failed import left the law as it was
 }
 
+// A nominal outside the input box (a measured trial whose inputs a plant did not clip, or a law
+// loaded around another problem's nominal): whatever the QP (33) returns, Step's output lies in
+// [u_min, u_max]. With alpha = 0 and x on the nominal, b = 0 and the output is the nominal input
+// clipped to the box (e.g. u_max = 1 for a nominal input 1.2, not 1.2); a non-finite state gives
+// the clipped nominal too. Every other test's nominal lies inside the box.
+TEST(OnlineController, OutputStaysInTheBoxForANominalOutsideIt) {
+  for (const auto equation : {BackwardEquation::kRiccati, BackwardEquation::kLyapunov}) {
+    ControlSetup s(2, 4, 3, 1.0, equation);
+    Trajectory outside = s.nominal;
+    for (auto& mode : outside.modes) {
+      mode.u.row(0) *= 4.0;   // 0.3 sin(tau) * 4: up to 1.2 > u_max = 1
+      mode.u.row(1) *= -4.0;  // down to -1.2 < u_min = -1
+    }
+    const Vector& umin = s.problem.bounds.u_min;
+    const Vector& umax = s.problem.bounds.u_max;
+    std::mt19937 rng(11);
+    std::normal_distribution<double> nd;
+    int nominal_outside = 0, checked = 0;
+    for (const double alpha : {0.0, 0.7}) {
+      OnlineController ctrl;
+      ctrl.Allocate(s.problem, s.nominal.total_samples());
+      ctrl.Load(outside, s.pass, alpha, Vector::Zero(2));
+      for (int k = 0; k < 2; ++k) {
+        const int n = s.sys->state_dim(k);
+        for (int j = 0; j < s.pass.num_samples(k); j += 7) {
+          const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
+          const Vector unom = outside.modes[k].u.col(j);
+          const Vector clipped = unom.cwiseMax(umin).cwiseMin(umax);
+          nominal_outside += (clipped - unom).norm() > 1e-3;
+          Vector x = outside.modes[k].x.col(j);
+          Vector u(2);
+          if (alpha == 0.0) {
+            ctrl.Step(k, t, x, u);
+            EXPECT_LT((u - clipped).cwiseAbs().maxCoeff(), 1e-12)
+                << "alpha 0 on the nominal: k " << k << " j " << j << " u " << u.transpose()
+                << " nominal " << unom.transpose();
+          } else {
+            for (int i = 0; i < n; ++i) x(i) += 0.5 * nd(rng);
+            ctrl.Step(k, t, x, u);
+          }
+          ++checked;
+          EXPECT_TRUE(((u - umin).array() >= 0.0).all() && ((umax - u).array() >= 0.0).all())
+              << "k " << k << " j " << j << " alpha " << alpha << ": u " << u.transpose()
+              << " outside [" << umin.transpose() << "] .. [" << umax.transpose() << "]";
+          // A non-finite state: the clipped nominal.
+          x(0) = std::numeric_limits<double>::quiet_NaN();
+          ctrl.Step(k, t, x, u);
+          EXPECT_LT((u - clipped).cwiseAbs().maxCoeff(), 1e-12)
+              << "non-finite state: k " << k << " j " << j << " u " << u.transpose();
+        }
+      }
+    }
+    EXPECT_GT(nominal_outside, checked / 4) << "the test needs nominal inputs outside the box";
+  }
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

@@ -240,6 +240,44 @@ TEST(SwitchingTimeUpdate, TheStepDoesNotDependOnTheScaleOfTheCost) {
   }
 }
 
+// SwitchingTimeSettings::max_duration_step caps each duration change on both sides: the step is
+// the duration QP's answer (brute force, an independent reference) on the box (7) intersected
+// with |dD_k| <= cap. The gradient wants D_0 longer and D_1 shorter, each by more than the cap
+// and less than (7) allows, so both sides of the cap bind; without it the step is longer.
+TEST(SwitchingTimeUpdate, MaxDurationStepCapsEachDurationChangeBothWays) {
+  TwoModes t;  // durations in [0.1, 1], final time free
+  const Eigen::Vector2d T(0.5, 1.0);  // D = (0.5, 0.5)
+  Matrix P22(2, 2);
+  P22 << 2.0, 0.5, 0.5, 1.0;
+  // S^T p2 = (p2_0 + p2_1, p2_1) = (-0.3, 0.25): D_0 up, D_1 down.
+  const Eigen::Vector2d p2(-0.55, 0.25);
+  Matrix S(2, 2);
+  S << 1, 0, 1, 1;
+  const Matrix H = S.transpose() * P22 * S;
+  const Vector g = S.transpose() * p2;
+  const Vector lo7 = (Vector(2) << 0.1 - 0.5, 0.1 - 0.5).finished();
+  const Vector hi7 = (Vector(2) << 1.0 - 0.5, 1.0 - 0.5).finished();
+  auto durations_change = [](const SwitchingTimeStep& s) {
+    return Eigen::Vector2d(s.dT(0), s.dT(1) - s.dT(0));
+  };
+  const Vector free_step = BruteForce(H, g, lo7, hi7, -kInf, kInf);
+  const SwitchingTimeStep uncapped = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0);
+  EXPECT_LT((durations_change(uncapped) - free_step).cwiseAbs().maxCoeff(), 1e-9);
+  const double cap = 0.05;
+  ASSERT_GT(free_step(0), 2 * cap);
+  ASSERT_LT(free_step(1), -2 * cap);
+  SwitchingTimeSettings settings;
+  settings.max_duration_step = cap;
+  const SwitchingTimeStep capped = SolveSwitchingTimeUpdate(t.problem, T, P22, p2, 1.0, settings);
+  const Vector lo = lo7.cwiseMax(-cap), hi = hi7.cwiseMin(cap);
+  const Vector expected = BruteForce(H, g, lo, hi, -kInf, kInf);
+  EXPECT_LT((durations_change(capped) - expected).cwiseAbs().maxCoeff(), 1e-9)
+      << "capped dD " << durations_change(capped).transpose() << ", expected "
+      << expected.transpose();
+  EXPECT_NEAR(durations_change(capped)(0), cap, 1e-12);
+  EXPECT_NEAR(durations_change(capped)(1), -cap, 1e-12);
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -343,6 +344,79 @@ TEST_F(TrialDriverTest, TrialsOfSeveralRunsAreJudgedOnTheirMeanCost) {
     EXPECT_EQ(a[i].accepted, b[2 * i + 1].accepted) << "trial " << i;
   }
   EXPECT_EQ(once.learner()->nominal_cost(), twice.learner()->nominal_cost());
+}
+
+// remeasure_nominal with restarts before any accepted trial: the trial that re-measures the
+// nominal at iteration 0 runs u^0, the law that produced x^0 (Learner::NextTrial would replay
+// x^0's inputs with the pass's feedback instead). (36) never holds and alpha_min lies just below
+// alpha_0, so every learned trial ends its line search and restarts it; the re-measurements
+// start elsewhere (x1), where u^0 = 0 and the replay (0 + K dx) differ, and must cost what u^0
+// costs from x1.
+TEST_F(TrialDriverTest, RemeasuringAtIterationZeroRunsTheInitialLaw) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.learner.c = 1e12;
+  settings.learner.alpha_min = 0.6;
+  settings.learner.failure_raises = 0;
+  settings.learner.restart_on_failure = true;
+  settings.learner.remeasure_nominal = true;
+  TrialDriver driver(p.problem, settings, fallback);
+  const Vector x1 = lq.x0 + Eigen::Vector2d(0.5, -0.5);
+  Trajectory measured, u0_from_x1;
+  plant.Run(x1, fallback, &u0_from_x1);
+  const double u0_cost_from_x1 = EvaluateCost(p.problem, u0_from_x1).total;
+  std::vector<TrialOutcome> o;
+  int remeasured = 0;
+  for (int i = 0; i < 7; ++i) {
+    const bool remeasuring = driver.learner()->initialized() && driver.learner()->remeasuring();
+    EXPECT_EQ(driver.runs_fallback(), i == 0 || remeasuring) << "trial " << i;
+    o.push_back(driver.RunTrial(plant, remeasuring ? x1 : Vector(lq.x0), &measured));
+    EXPECT_EQ(o.back().remeasured, remeasuring) << "trial " << i;
+    if (remeasuring) {
+      ++remeasured;
+      EXPECT_TRUE(o.back().ran_fallback) << "trial " << i << " re-measured with the replay";
+      EXPECT_DOUBLE_EQ(o.back().cost, u0_cost_from_x1) << "trial " << i;
+      // I^i is the mean of the re-measurements taken back to x^0's start (the measured cost
+      // minus the start correction); x^0's own cost is dropped. All of them are equal here.
+      ASSERT_GT(std::abs(o.back().start_shift), 0.01 * o.back().cost) << "x1 must matter";
+      EXPECT_NEAR(driver.learner()->nominal_cost(), o.back().cost - o.back().start_shift,
+                  1e-12 * o.back().cost)
+          << "trial " << i;
+    }
+  }
+  // Trials 1, 3, 5 are rejected and restart the search; 2, 4, 6 re-measure with u^0.
+  EXPECT_EQ(remeasured, 3);
+  for (int i : {1, 3, 5}) {
+    EXPECT_FALSE(o[static_cast<size_t>(i)].ran_fallback) << "trial " << i;
+    EXPECT_FALSE(o[static_cast<size_t>(i)].accepted) << "trial " << i;
+    EXPECT_TRUE(o[static_cast<size_t>(i)].restarted) << "trial " << i;
+  }
+  for (int i : {2, 4, 6}) EXPECT_TRUE(o[static_cast<size_t>(i)].remeasured) << "trial " << i;
+  EXPECT_EQ(driver.learner()->iteration(), 0);
+}
+
+// After accepted iterations a terminated learner's law is the one that produced the last
+// accepted trial (Learner::NextTrial's replay), not u^0: the driver falls back to u^0 only at
+// iteration 0. On this deterministic plant the replay reproduces the nominal's cost.
+TEST_F(TrialDriverTest, TerminationAfterAcceptedTrialsReplaysTheLastAcceptedLaw) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.learner.alpha_min = 0.3;  // two rejections in a row terminate
+  settings.learner.alpha_after_accept = AlphaAfterAccept::kReset;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  int trials = 0;
+  while (driver.learner()->status() != LearnerStatus::kLineSearchFailed && trials < 500) {
+    driver.RunTrial(plant, lq.x0, &measured);
+    ++trials;
+  }
+  ASSERT_EQ(driver.learner()->status(), LearnerStatus::kLineSearchFailed);
+  ASSERT_GT(driver.learner()->iteration(), 3);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_FALSE(driver.runs_fallback()) << "replay " << i;
+    const TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+    EXPECT_FALSE(o.ran_fallback) << "replay " << i;
+    EXPECT_NEAR(o.cost, driver.learner()->nominal_cost(), 1e-9 * driver.learner()->nominal_cost())
+        << "replay " << i;
+  }
 }
 
 }  // namespace

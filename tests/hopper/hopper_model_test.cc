@@ -321,5 +321,65 @@ TEST(HopperModelTest, TheRk4StepBoundIsWhereTheFlightHipSpringGrows) {
   EXPECT_NO_THROW(HopperParams().CheckRk4Step(dt, "test"));
 }
 
+// The stiffness servo of eq. (41), kdd + 2 beta kd + beta^2 k = beta^2 k0, in both modes. With
+// e = k - k0 (k0 held) it is critically damped; its closed form, derived here, is
+//   e(t)  = exp(-beta t) [e0 + (ed0 + beta e0) t],
+//   ed(t) = exp(-beta t) [ed0 - beta (ed0 + beta e0) t]
+// (check: e(0) = e0, ed(0) = ed0, and e'' + 2 beta e' + beta^2 e = 0). The model integrated by RK4
+// after a step in both stiffness commands, from stiffnesses already moving (kd != 0), must follow
+// it for the hip and the leg, in flight and in stance. The other model tests hold k = k0, kd = 0,
+// where the servo lines do nothing.
+TEST(HopperModelTest, StiffnessServoFollowsTheCriticallyDampedClosedFormAfterAStep) {
+  HopperParams p;
+  const double b = p.beta;
+  const HopperModel model(p);
+  auto closed_form = [b](double k0, double k_start, double kd_start, double t, double* k,
+                         double* kd) {
+    const double e0 = k_start - k0;
+    const double c = kd_start + b * e0;
+    const double decay = std::exp(-b * t);
+    *k = k0 + decay * (e0 + c * t);
+    *kd = decay * (kd_start - b * c * t);
+  };
+  // Commands after the step, and the stiffnesses and rates before it.
+  const double k0_hip = 140.0, k0_leg = 2600.0;
+  const double hip0 = 80.0, hipd0 = 300.0, leg0 = 2000.0, legd0 = -1500.0;
+  const Eigen::Vector4d u(0.5, 5.0, k0_hip, k0_leg);
+  V14 xf;
+  xf << 0.0, 1.5, 0.05, 0.0, 0.7, hip0, leg0, 0.5, 0.0, 0.2, -0.1, 0.0, hipd0, legd0;
+  V10 xs;
+  xs << 0.05, 0.0, 0.66, hip0, leg0, -0.5, 0.2, -0.3, hipd0, legd0;
+  struct Case {
+    int mode;
+    Eigen::VectorXd x0;
+    int k_hip, k_leg, kd_hip, kd_leg;
+  };
+  const Case cases[] = {
+      {hopper::kFlight, xf, hopper::kKhip, hopper::kKleg, hopper::kKhipd, hopper::kKlegd},
+      {hopper::kStance, xs, hopper::kSKhip, hopper::kSKleg, hopper::kSKhipd, hopper::kSKlegd}};
+  for (const Case& c : cases) {
+    const std::vector<HopSample> run = IntegrateMode(model, c.mode, c.x0, u, 0.3, 1e-4);
+    double err_k_hip = 0, err_k_leg = 0, err_kd_hip = 0, err_kd_leg = 0;
+    for (const HopSample& s : run) {
+      double k, kd;
+      closed_form(k0_hip, hip0, hipd0, s.t, &k, &kd);
+      err_k_hip = std::max(err_k_hip, std::abs(s.x(c.k_hip) - k));
+      err_kd_hip = std::max(err_kd_hip, std::abs(s.x(c.kd_hip) - kd));
+      closed_form(k0_leg, leg0, legd0, s.t, &k, &kd);
+      err_k_leg = std::max(err_k_leg, std::abs(s.x(c.k_leg) - k));
+      err_kd_leg = std::max(err_kd_leg, std::abs(s.x(c.kd_leg) - kd));
+    }
+    // RK4 at beta dt = 2e-3: errors near 1e-12 of the step; the tolerances are 1e-6 of it
+    // (hip step 60 N m/rad, leg step 600 N/m; rates up to beta times that).
+    EXPECT_LT(err_k_hip, 1e-6 * 60.0) << "mode " << c.mode;
+    EXPECT_LT(err_kd_hip, 1e-6 * 60.0 * b) << "mode " << c.mode;
+    EXPECT_LT(err_k_leg, 1e-6 * 600.0) << "mode " << c.mode;
+    EXPECT_LT(err_kd_leg, 1e-6 * 600.0 * b) << "mode " << c.mode;
+    // The step has moved both stiffnesses most of the way to the command.
+    EXPECT_NEAR(run.back().x(c.k_hip), k0_hip, 0.05 * 60.0) << "mode " << c.mode;
+    EXPECT_NEAR(run.back().x(c.k_leg), k0_leg, 0.05 * 600.0) << "mode " << c.mode;
+  }
+}
+
 }  // namespace
 }  // namespace ddoc
