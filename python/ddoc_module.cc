@@ -143,10 +143,28 @@ std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::o
       throw InvalidArgument("B: " + std::to_string(Bl.size()) + " matrices, expected " +
                             std::to_string(K) + " (one per mode)");
     }
-    B.push_back(AsMatrix(Bl[0], "B[0]", A[0].rows(), -1));
-    m = static_cast<int>(B[0].cols());
-    for (size_t k = 1; k < K; ++k) {
-      B.push_back(AsMatrix(Bl[k], "B[" + std::to_string(k) + "]", A[k].rows(), m));
+    for (size_t k = 0; k < K; ++k) {
+      const std::string i = "[" + std::to_string(k) + "]";
+      Matrix Bk = AsMatrix(Bl[k], "B" + i);
+      if (k == 0) m = static_cast<int>(Bk.cols());
+      if (Bk.rows() != A[k].rows()) {
+        // Name A[k] too: a wrong A[k] shows up as B[k]'s row count (issue 47).
+        throw InvalidArgument("A" + i + " and B" + i + " disagree on mode " +
+                              std::to_string(k) + "'s state size: A" + i + " has shape (" +
+                              std::to_string(A[k].rows()) + ", " + std::to_string(A[k].cols()) +
+                              "), B" + i + " (" + std::to_string(Bk.rows()) + ", " +
+                              std::to_string(Bk.cols()) + "); expected A" + i + " (" +
+                              std::to_string(Bk.rows()) + ", " + std::to_string(Bk.rows()) +
+                              ") or B" + i + " (" + std::to_string(A[k].rows()) + ", " +
+                              std::to_string(m) + ")");
+      }
+      if (Bk.cols() != m) {
+        throw InvalidArgument("B" + i + ": shape (" + std::to_string(Bk.rows()) + ", " +
+                              std::to_string(Bk.cols()) + "), expected (" +
+                              std::to_string(A[k].rows()) + ", " + std::to_string(m) +
+                              ") (m inputs, as B[0])");
+      }
+      B.push_back(std::move(Bk));
     }
   } else {
     for (size_t k = 0; k < K; ++k) B.push_back(Matrix::Zero(A[k].rows(), 0));
@@ -634,9 +652,11 @@ class PyLearner {
         py::gil_scoped_release release;
         cost_plant.Run(x0, initial_policy, &measured);
         if (same) {
+          learner.ReserveSamples(measured.total_samples());
           learner.Initialize(measured);
         } else {
           direction_plant.Run(x0, initial_policy, &direction);
+          learner.ReserveSamples(std::max(measured.total_samples(), direction.total_samples()));
           learner.Initialize(measured, &direction);
         }
       }

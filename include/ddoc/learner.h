@@ -116,7 +116,10 @@ struct LearnerSettings {
   /// false (the pass's gains, the paper). docs/engine.md, "The trial's feedback".
   bool blend_feedback = false;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
-  int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
+  /// Preallocation: most samples of one trajectory (all modes). Solve raises it, before the
+  /// first trial, to 1.25x the initial trial's samples + 8 K when that trial has more (e.g. 12 s
+  /// at dt = 5e-4: 24012); the incremental API (Initialize) names it in its error. Default 20000.
+  int max_samples = 20000;
   BackwardPassSettings backward;         ///< (30)
   SwitchingTimeSettings switching;       ///< (31)
   OnlineControllerSettings controller;   ///< (33)-(34)
@@ -266,6 +269,11 @@ class Learner {
   /// next hop's takeoff state). The next NextTrial() uses the new pass. Call it between
   /// CompleteTrial (or Initialize) and NextTrial.
   void RecomputeDirection();
+
+  /// Reallocates for trajectories of `samples` samples (+ 25 % + 8 K) when settings().max_samples
+  /// is smaller, raising it (Solve calls it with the initial trial's count). Allocates; call
+  /// before Initialize (it discards the pass and the loaded laws).
+  void ReserveSamples(int samples);
 
   /// The law that produced the initial nominal (u^0), for blend_feedback before the first
   /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.

@@ -27,7 +27,9 @@ class QuadraticTrackingCost : public SwitchedCost {
                         std::vector<Matrix> N = {});
 
   /// Modes the cost was built for (the length of every list).
-  int num_modes() const { return static_cast<int>(Q_.size()); }
+  int num_modes() const override { return static_cast<int>(Q_.size()); }
+  /// R_k (symmetric part), m x m.
+  const Matrix& R(int k) const { return R_[static_cast<size_t>(k)]; }
 
  protected:
   double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override;

@@ -109,7 +109,7 @@ Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
     const double D = nominal.T(k) - nominal.ModeStart(k);
     const double tol = 1e-12 * std::max(1.0, D);
     lo(k) = D <= problem.bounds.duration_min(k) + tol ? 0.0 : -kInf;
-    hi(k) = D >= problem.bounds.duration_max(k) - tol ? 0.0 : kInf;
+    hi(k) = D >= problem.bounds.MaxDuration(k) - tol ? 0.0 : kInf;
   }
   const double TK = nominal.T(K - 1);
   const double ttol = 1e-12 * std::max(1.0, TK);
@@ -154,6 +154,15 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   pass_.Allocate(problem, settings.max_samples, settings.backward);
   for (auto& c : controllers_) c.Allocate(problem, settings.max_samples, settings.controller);
   mu_ = settings.regularization_min;
+}
+
+void Learner::ReserveSamples(int samples) {
+  if (samples <= settings_.max_samples) return;
+  // A margin for trials whose durations differ from the initial plan's (with a fixed final time
+  // the total moves by a few samples per mode).
+  settings_.max_samples = samples + samples / 4 + 8 * problem_->num_modes();
+  pass_.Allocate(*problem_, settings_.max_samples, settings_.backward);
+  for (auto& c : controllers_) c.Allocate(*problem_, settings_.max_samples, settings_.controller);
 }
 
 bool Learner::RunPass() {
@@ -643,13 +652,32 @@ TrialResult Learner::Reported(TrialResult r) const {
 SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const ConstVectorRef& x0,
                            Policy& initial_policy) {
   const bool same = &direction_plant == &cost_plant;
+  const Bounds& bounds = problem_->bounds;
+  if (bounds.final_time_min == bounds.final_time_max) {
+    // A fixed final time: the initial plan must end there (the plant would stretch or cut the
+    // last mode silently).
+    double sum = 0;
+    bool finite = true;
+    for (int k = 0; k < problem_->num_modes(); ++k) {
+      const double d = initial_policy.PlannedDuration(k);
+      finite = finite && std::isfinite(d);
+      sum += d;
+    }
+    if (finite && std::abs(sum - bounds.final_time_max) > 1e-9 * std::max(1.0, sum)) {
+      throw InvalidArgument("Learner::Solve: the initial durations add up to " +
+                            std::to_string(sum) + " s, but the final time is fixed at " +
+                            std::to_string(bounds.final_time_max) + " s (Bounds::FixFinalTime)");
+    }
+  }
   Trajectory measured;
   cost_plant.Run(x0, initial_policy, &measured);
   if (same) {
+    ReserveSamples(measured.total_samples());
     Initialize(measured);
   } else {
     Trajectory direction;
     direction_plant.Run(x0, initial_policy, &direction);
+    ReserveSamples(std::max(measured.total_samples(), direction.total_samples()));
     Initialize(measured, &direction);
   }
   SolveResult result;

@@ -177,6 +177,125 @@ TEST(FeedbackLaw, IsTheContinuousTimeLqrGain) {
   EXPECT_LT(ff, 1e-2 * (K_care * Eigen::Vector2d(1, -0.5)).norm());
 }
 
+
+// ---------------------------------------------------------------------------------------------
+// Defaults that need no lines.
+
+TEST(Defaults, NoSurfacesNeedNoWeightsAndAFixedFinalTimeBoundsTheDurations) {
+  // exp0 as a user writes it: no surface_weights, no duration_max, FixFinalTime(2).
+  const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0");
+  Problem problem;
+  problem.system = sp->system.get();
+  problem.cost = sp->cost.get();
+  problem.bounds.u_min = Vector::Constant(1, -kInf);
+  problem.bounds.u_max = Vector::Constant(1, kInf);
+  problem.bounds.duration_min = Vector::Constant(2, 0.01);
+  problem.bounds.FixFinalTime(2.0);
+  EXPECT_NO_THROW(problem.Validate());
+  EXPECT_EQ(problem.SurfaceWeight(1), 0.0);
+  EXPECT_EQ(problem.bounds.MaxDuration(0), 2.0);
+  // Infinite entries: bounded by the final time as well.
+  problem.bounds.duration_max = Vector::Constant(2, kInf);
+  EXPECT_NO_THROW(problem.Validate());
+  EXPECT_EQ(problem.bounds.MaxDuration(1), 2.0);
+  LearnerSettings settings;
+  settings.max_trials = sp->trial_budget();
+  FunctionPolicy initial = sp->InitialPolicy();
+  ModelPlant plant(problem);
+  Learner learner(problem, settings);
+  const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+  EXPECT_EQ(r.status, LearnerStatus::kConverged) << r.stop_reason;
+  EXPECT_LT(std::abs(r.cost - sp->reference_cost) / sp->reference_cost, 1e-3) << r.cost;
+  EXPECT_LT((r.T - sp->reference_T).cwiseAbs().maxCoeff(), 1e-3) << r.T.transpose();
+  // Without a final time the durations still need a finite upper bound, named.
+  problem.bounds.final_time_min = 0;
+  problem.bounds.final_time_max = kInf;
+  EXPECT_NE(ErrorOf([&] { problem.Validate(); }).find("bounds.duration_max"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input named up front.
+
+TEST(NamedErrors, ACostWithMoreModesThanTheSystem) {
+  // A 3-mode QuadraticCost on the 2-mode EXP0 problem: used to return 8.665 at switch 0.177
+  // with the third mode dropped (right: 9.7665 at 0.18967).
+  const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0");
+  const LinearQuadraticData d = Exp0Data(kInf);
+  QuadraticTrackingCost three({d.Q[0], d.Q[1], d.Q[1]}, {d.r[0], d.r[1], d.r[1]},
+                              {d.R[0], d.R[1], d.R[1]}, {0, 0, 0}, {d.S[0], d.S[1], d.S[1]},
+                              {d.s[0], d.s[1], d.s[1]});
+  sp->problem.cost = &three;
+  const std::string error = ErrorOf([&] { sp->problem.Validate(); });
+  EXPECT_NE(error.find("the cost has 3 modes, the system 2"), std::string::npos) << error;
+  EXPECT_NE(ErrorOf([&] { Learner learner(sp->problem); }).find("3 modes"), std::string::npos);
+}
+
+TEST(NamedErrors, AWrongAIsNamedNotB) {
+  // A 3x3 A[1] on a mode whose B[1] has 2 rows: the message names A[1] (it blamed B[1]).
+  const std::string error = ErrorOf([&] {
+    LinearSystem system({Matrix::Identity(2, 2), Matrix::Identity(3, 3)},
+                        {Matrix::Ones(2, 1), Matrix::Ones(2, 1)}, {Matrix::Identity(3, 2)});
+  });
+  EXPECT_NE(error.find("A[1] and B[1] disagree"), std::string::npos) << error;
+  EXPECT_NE(error.find("B[1] is (2, 1), expected (3, 1); or A[1] should be (2, 2)"),
+            std::string::npos)
+      << error;
+}
+
+TEST(NamedErrors, InitialDurationsThatMissAFixedFinalTime) {
+  const std::unique_ptr<StandardProblem> sp = MakeStandardProblem("exp0");  // final time 2 s
+  FunctionPolicy initial(Eigen::Vector2d(1.0, 0.5), sp->initial_input);
+  const std::string error = ErrorOf([&] { SolveOnModel(*sp, initial, LearnerSettings{}); });
+  EXPECT_NE(error.find("initial durations add up to 1.5"), std::string::npos) << error;
+  EXPECT_NE(error.find("fixed at 2"), std::string::npos) << error;
+}
+
+TEST(NamedErrors, ZeroInputWeightOnAnUnboundedInput) {
+  // R = 0 with |u| unbounded: no minimum in u (used to run 27 trials to line_search_failed).
+  LinearQuadraticData d = Exp0Data(kInf);
+  d.R = {Matrix::Zero(1, 1), Matrix::Zero(1, 1)};
+  const std::unique_ptr<StandardProblem> sp = StandardProblemFromLq(d);
+  const std::string error = ErrorOf([&] { sp->problem.Validate(); });
+  EXPECT_NE(error.find("R[0] of the quadratic cost is singular"), std::string::npos) << error;
+  EXPECT_NE(error.find("input 0, which is unbounded"), std::string::npos) << error;
+  // With finite input bounds the same R is a (bang-bang) problem with a minimum: accepted.
+  sp->problem.bounds.u_min = Vector::Constant(1, -8);
+  sp->problem.bounds.u_max = Vector::Constant(1, 8);
+  EXPECT_NO_THROW(sp->problem.Validate());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Buffers sized from the problem and the plant.
+
+TEST(Samples, ALongHorizonAtAFinePlantStepNeedsNoSetting) {
+  // 12 s at dt = 5e-4: 24012 samples, more than the default max_samples = 20000 (used to throw
+  // "24012 samples, more than max_samples").
+  LinearQuadraticData d = LqrData();
+  d.final_time = 12;
+  const std::unique_ptr<StandardProblem> sp = StandardProblemFromLq(d);
+  sp->initial_durations = Vector::Constant(1, 12.0);
+  ModelPlantSettings plant_settings;
+  plant_settings.dt = 5e-4;
+  ModelPlant plant(sp->problem, plant_settings);
+  LearnerSettings settings;
+  ASSERT_EQ(settings.max_samples, 20000);
+  Learner learner(sp->problem, settings);
+  FunctionPolicy initial = sp->InitialPolicy();
+  const SolveResult r = learner.Solve(plant, plant, sp->x0, initial);
+  EXPECT_EQ(r.status, LearnerStatus::kConverged) << r.stop_reason;
+  EXPECT_GT(learner.settings().max_samples, 24000);
+  EXPECT_NEAR(r.cost, LqOptimalCostRk4(d, Vector::Constant(1, 12.0), 1e-3), 1e-3 * r.cost);
+  // The incremental API (no Solve) names the setting to raise.
+  Trajectory measured;
+  plant.Run(sp->x0, initial, &measured);
+  Learner incremental(sp->problem, settings);
+  const std::string error = ErrorOf([&] { incremental.Initialize(measured); });
+  EXPECT_NE(error.find("LearnerSettings.max_samples"), std::string::npos) << error;
+  EXPECT_GT(measured.total_samples(), 24000);
+  EXPECT_NE(error.find("at least " + std::to_string(measured.total_samples())), std::string::npos)
+      << error;
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

@@ -78,3 +78,39 @@ def test_stop_reason_names_the_budget():
     assert "max_trials = 1" in result.stop_reason
     with pytest.raises(ValueError, match="solve first"):
         ddoc.Learner(ddoc.Problem(system, cost, bounds, surface_weights=[0.0])).feedback_law()
+
+
+def test_defaults_and_named_errors():
+    A = [np.array([[0.6, 1.2], [-0.8, 3.4]]), np.array([[4.0, 3.0], [-1.0, 0.0]])]
+    B = [np.array([[1.0], [1.0]]), np.array([[2.0], [-1.0]])]
+    # A wrong A[1] is named (it used to blame B[1]).
+    with pytest.raises(ValueError, match=r"A\[1\] and B\[1\] disagree"):
+        ddoc.LinearSystem([A[0], np.eye(3)], B)
+    system = ddoc.LinearSystem(A, B)
+    cost3 = ddoc.QuadraticCost(Q=[np.eye(2)] * 3, R=[np.eye(1)] * 3)
+    bounds = ddoc.Bounds(u_min=[-np.inf], u_max=[np.inf], duration_min=[0.01, 0.01],
+                         duration_max=[2.0, 2.0])
+    bounds.fix_final_time(2.0)
+    with pytest.raises(ValueError, match="the cost has 3 modes, the system 2"):
+        ddoc.Problem(system, cost3, bounds)
+    with pytest.raises(ValueError, match="R\\[0\\] of the quadratic cost is singular"):
+        ddoc.Problem(system, ddoc.QuadraticCost(Q=[np.eye(2)] * 2, R=[np.zeros((1, 1))] * 2),
+                     bounds)
+    problem = ddoc.Problem(system, ddoc.QuadraticCost(Q=[np.eye(2)] * 2, R=[np.eye(1)] * 2),
+                           bounds)
+    with pytest.raises(ValueError, match="initial durations add up to 1.5"):
+        ddoc.Learner(problem).solve([0.0, 2.0], [1.0, 0.5])
+
+
+def test_a_fixed_final_time_bounds_the_durations():
+    A = [np.array([[0.6, 1.2], [-0.8, 3.4]]), np.array([[4.0, 3.0], [-1.0, 0.0]])]
+    B = [np.array([[1.0], [1.0]]), np.array([[2.0], [-1.0]])]
+    bounds = ddoc.Bounds(u_min=[-np.inf], u_max=[np.inf], duration_min=[0.01, 0.01])
+    bounds.fix_final_time(2.0)
+    cost = ddoc.QuadraticCost(Q=[np.diag([0.0, 1.0])] * 2, R=[np.eye(1)] * 2,
+                              S=[np.zeros((2, 2)), np.eye(2)],
+                              r=[np.array([0.0, 2.0])] * 2, s=[np.zeros(2), np.array([4.0, 2.0])])
+    problem = ddoc.Problem(ddoc.LinearSystem(A, B), cost, bounds)
+    result = ddoc.Learner(problem).solve([0.0, 2.0], [1.0, 1.0])
+    assert result.status == "converged"
+    assert result.cost == pytest.approx(9.7665, rel=1e-3)
