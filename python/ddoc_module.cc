@@ -150,13 +150,13 @@ std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::o
       if (Bk.rows() != A[k].rows()) {
         // Name A[k] too: a wrong A[k] shows up as B[k]'s row count (issue 47).
         throw InvalidArgument("A" + i + " and B" + i + " disagree on mode " +
-                              std::to_string(k) + "'s state size: A" + i + " has shape (" +
+                              std::to_string(k) + "'s state size: B" + i + ": shape (" +
+                              std::to_string(Bk.rows()) + ", " + std::to_string(Bk.cols()) +
+                              "), expected (" + std::to_string(A[k].rows()) + ", " +
+                              std::to_string(m) + ") as A" + i + " has shape (" +
                               std::to_string(A[k].rows()) + ", " + std::to_string(A[k].cols()) +
-                              "), B" + i + " (" + std::to_string(Bk.rows()) + ", " +
-                              std::to_string(Bk.cols()) + "); expected A" + i + " (" +
-                              std::to_string(Bk.rows()) + ", " + std::to_string(Bk.rows()) +
-                              ") or B" + i + " (" + std::to_string(A[k].rows()) + ", " +
-                              std::to_string(m) + ")");
+                              "); or A" + i + " should be (" + std::to_string(Bk.rows()) + ", " +
+                              std::to_string(Bk.rows()) + ")");
       }
       if (Bk.cols() != m) {
         throw InvalidArgument("B" + i + ": shape (" + std::to_string(Bk.rows()) + ", " +
@@ -619,6 +619,7 @@ class PyLearner {
       fn = [u_const](int, double, const ConstVectorRef&, VectorRef u) { u = u_const; };
     }
     FunctionPolicy initial_policy(durations, fn);
+    learner_->CheckInitialPolicy(initial_policy);
     ModelPlantSettings plant_settings;
     plant_settings.dt = dt;
     ModelPlant model(problem, plant_settings);

@@ -275,6 +275,10 @@ class Learner {
   /// before Initialize (it discards the pass and the loaded laws).
   void ReserveSamples(int samples);
 
+  /// Throws InvalidArgument when the planned durations of `initial_policy` (all finite) do not
+  /// add up to a fixed final time (to 1e-9 relative). Solve calls it first.
+  void CheckInitialPolicy(const Policy& initial_policy) const;
+
   /// The law that produced the initial nominal (u^0), for blend_feedback before the first
   /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.
   void SetInitialLaw(const OnlineController* law) { initial_law_ = law; }

@@ -156,6 +156,26 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   mu_ = settings.regularization_min;
 }
 
+void Learner::CheckInitialPolicy(const Policy& initial_policy) const {
+  const Bounds& bounds = problem_->bounds;
+  if (bounds.final_time_min == bounds.final_time_max) {
+    // A fixed final time: the initial plan must end there (the plant would stretch or cut the
+    // last mode silently).
+    double sum = 0;
+    bool finite = true;
+    for (int k = 0; k < problem_->num_modes(); ++k) {
+      const double d = initial_policy.PlannedDuration(k);
+      finite = finite && std::isfinite(d);
+      sum += d;
+    }
+    if (finite && std::abs(sum - bounds.final_time_max) > 1e-9 * std::max(1.0, sum)) {
+      throw InvalidArgument("Learner: the initial durations add up to " +
+                            std::to_string(sum) + " s, but the final time is fixed at " +
+                            std::to_string(bounds.final_time_max) + " s (Bounds::FixFinalTime)");
+    }
+  }
+}
+
 void Learner::ReserveSamples(int samples) {
   if (samples <= settings_.max_samples) return;
   // A margin for trials whose durations differ from the initial plan's (with a fixed final time
@@ -652,23 +672,7 @@ TrialResult Learner::Reported(TrialResult r) const {
 SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const ConstVectorRef& x0,
                            Policy& initial_policy) {
   const bool same = &direction_plant == &cost_plant;
-  const Bounds& bounds = problem_->bounds;
-  if (bounds.final_time_min == bounds.final_time_max) {
-    // A fixed final time: the initial plan must end there (the plant would stretch or cut the
-    // last mode silently).
-    double sum = 0;
-    bool finite = true;
-    for (int k = 0; k < problem_->num_modes(); ++k) {
-      const double d = initial_policy.PlannedDuration(k);
-      finite = finite && std::isfinite(d);
-      sum += d;
-    }
-    if (finite && std::abs(sum - bounds.final_time_max) > 1e-9 * std::max(1.0, sum)) {
-      throw InvalidArgument("Learner::Solve: the initial durations add up to " +
-                            std::to_string(sum) + " s, but the final time is fixed at " +
-                            std::to_string(bounds.final_time_max) + " s (Bounds::FixFinalTime)");
-    }
-  }
+  CheckInitialPolicy(initial_policy);
   Trajectory measured;
   cost_plant.Run(x0, initial_policy, &measured);
   if (same) {
