@@ -64,11 +64,13 @@ class Cost:
     def switching(self, k: int, x: ArrayLike) -> float: ...
 
 class QuadraticCost(Cost):
-    """l_k = 1/2 (x-r_k)'Q_k(x-r_k) + 1/2 u'R_k u + rho_k, phi_k = 1/2 (x-s_k)'S_k(x-s_k)."""
+    """l_k = 1/2 (x-r_k)'Q_k(x-r_k) + 1/2 u'R_k u + u'N_k(x-r_k) + rho_k,
+    phi_k = 1/2 (x-s_k)'S_k(x-s_k)."""
     def __init__(self, Q: Sequence[ArrayLike], R: Sequence[ArrayLike],
                  S: Optional[Sequence[ArrayLike]] = None, r: Optional[Sequence[ArrayLike]] = None,
                  s: Optional[Sequence[ArrayLike]] = None,
-                 rho: Optional[Sequence[float]] = None) -> None: ...
+                 rho: Optional[Sequence[float]] = None,
+                 N: Optional[Sequence[ArrayLike]] = None) -> None: ...
 
 class CallbackCost(Cost):
     """A cost of Python callables; missing derivatives by central differences."""
@@ -200,6 +202,7 @@ class SolveResult:
     optimality_inputs: float
     optimality_times: float
     cost_history: Array
+    stop_reason: str  # why it stopped, with the figures of the deciding test
     interrupted: bool
 
 class Learner:
@@ -219,6 +222,9 @@ class Learner:
     def iteration(self) -> int: ...
     @property
     def settings(self) -> LearnerSettings: ...
+    def feedback_law(self, alpha: float = 1.0) -> List[Dict[str, Array]]:
+        """Per mode: t (N,), x (N, n), u (N, m), u_ff (N, m), K (N, m, n); u = u_ff + K x."""
+        ...
 
 
 HAVE_RENDER: bool

@@ -143,10 +143,28 @@ std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::o
       throw InvalidArgument("B: " + std::to_string(Bl.size()) + " matrices, expected " +
                             std::to_string(K) + " (one per mode)");
     }
-    B.push_back(AsMatrix(Bl[0], "B[0]", A[0].rows(), -1));
-    m = static_cast<int>(B[0].cols());
-    for (size_t k = 1; k < K; ++k) {
-      B.push_back(AsMatrix(Bl[k], "B[" + std::to_string(k) + "]", A[k].rows(), m));
+    for (size_t k = 0; k < K; ++k) {
+      const std::string i = "[" + std::to_string(k) + "]";
+      Matrix Bk = AsMatrix(Bl[k], "B" + i);
+      if (k == 0) m = static_cast<int>(Bk.cols());
+      if (Bk.rows() != A[k].rows()) {
+        // Name A[k] too: a wrong A[k] shows up as B[k]'s row count (issue 47).
+        throw InvalidArgument("A" + i + " and B" + i + " disagree on mode " +
+                              std::to_string(k) + "'s state size: B" + i + ": shape (" +
+                              std::to_string(Bk.rows()) + ", " + std::to_string(Bk.cols()) +
+                              "), expected (" + std::to_string(A[k].rows()) + ", " +
+                              std::to_string(m) + ") as A" + i + " has shape (" +
+                              std::to_string(A[k].rows()) + ", " + std::to_string(A[k].cols()) +
+                              "); or A" + i + " should be (" + std::to_string(Bk.rows()) + ", " +
+                              std::to_string(Bk.rows()) + ")");
+      }
+      if (Bk.cols() != m) {
+        throw InvalidArgument("B" + i + ": shape (" + std::to_string(Bk.rows()) + ", " +
+                              std::to_string(Bk.cols()) + "), expected (" +
+                              std::to_string(A[k].rows()) + ", " + std::to_string(m) +
+                              ") (m inputs, as B[0])");
+      }
+      B.push_back(std::move(Bk));
     }
   } else {
     for (size_t k = 0; k < K; ++k) B.push_back(Matrix::Zero(A[k].rows(), 0));
@@ -181,7 +199,8 @@ std::unique_ptr<LinearSystem> MakeLinearSystem(const py::list& A_in, const py::o
 /// and rho optional (zeros); errors name the argument and both shapes.
 std::unique_ptr<QuadraticTrackingCost> MakeQuadraticCost(const py::list& Q_in, const py::list& R_in,
                                                        const py::object& S_in, const py::object& r_in,
-                                                       const py::object& s_in, const py::object& rho_in) {
+                                                       const py::object& s_in, const py::object& rho_in,
+                                                       const py::object& N_in) {
   std::vector<Matrix> Q;
   const size_t K = Q_in.size();
   if (K == 0) throw InvalidArgument("Q: expected at least one mode, got an empty list");
@@ -226,8 +245,17 @@ std::unique_ptr<QuadraticTrackingCost> MakeQuadraticCost(const py::list& Q_in, c
     s.push_back(s_in.is_none() ? Vector::Zero(n) : AsVector(sl[k], "s" + idx, n));
     rho.push_back(rho_in.is_none() ? 0.0 : AsFloat(rhol[k], "rho" + idx));
   }
+  std::vector<Matrix> N;  // empty: no cross term
+  if (!N_in.is_none()) {
+    const py::list Nl = N_in;
+    check_count(Nl.size(), "N");
+    for (size_t k = 0; k < K; ++k) {
+      N.push_back(AsMatrix(Nl[k], "N[" + std::to_string(k) + "]", R[k].rows(), Q[k].rows()));
+    }
+  }
   return std::make_unique<QuadraticTrackingCost>(std::move(Q), std::move(r), std::move(R),
-                                                 std::move(rho), std::move(S), std::move(s));
+                                                 std::move(rho), std::move(S), std::move(s),
+                                                 std::move(N));
 }
 
 
@@ -591,6 +619,7 @@ class PyLearner {
       fn = [u_const](int, double, const ConstVectorRef&, VectorRef u) { u = u_const; };
     }
     FunctionPolicy initial_policy(durations, fn);
+    learner_->CheckInitialPolicy(initial_policy);
     ModelPlantSettings plant_settings;
     plant_settings.dt = dt;
     ModelPlant model(problem, plant_settings);
@@ -616,6 +645,7 @@ class PyLearner {
       result.cost = learner.nominal_cost();
       result.T = learner.nominal().T;
       result.optimality = learner.optimality();
+      result.stop_reason = learner.StopReason();
     };
     bool initialized = false;
     try {
@@ -623,9 +653,11 @@ class PyLearner {
         py::gil_scoped_release release;
         cost_plant.Run(x0, initial_policy, &measured);
         if (same) {
+          learner.ReserveSamples(measured.total_samples());
           learner.Initialize(measured);
         } else {
           direction_plant.Run(x0, initial_policy, &direction);
+          learner.ReserveSamples(std::max(measured.total_samples(), direction.total_samples()));
           learner.Initialize(measured, &direction);
         }
       }
@@ -806,11 +838,12 @@ class SolveInterrupted(KeyboardInterrupt):
 
   py::class_<QuadraticTrackingCost, SwitchedCost>(
       mod, "QuadraticCost",
-      "l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + rho_k, "
+      "l_k = 1/2 (x - r_k)' Q_k (x - r_k) + 1/2 u' R_k u + u' N_k (x - r_k) + rho_k, "
       "phi_k = 1/2 (x - s_k)' S_k (x - s_k) (phi_{K-1}: the terminal cost). Lists of K entries; "
-      "S, r, s, rho default to zero. Runs entirely in C++.")
+      "S, r, s, rho, N (m x n_k cross terms) default to zero. Runs entirely in C++.")
       .def(py::init(&MakeQuadraticCost), py::arg("Q"), py::arg("R"), py::arg("S") = py::none(),
-           py::arg("r") = py::none(), py::arg("s") = py::none(), py::arg("rho") = py::none());
+           py::arg("r") = py::none(), py::arg("s") = py::none(), py::arg("rho") = py::none(),
+           py::arg("N") = py::none());
 
   py::class_<CallbackSystem, SwitchedSystem>(
       mod, "CallbackSystem",
@@ -997,6 +1030,8 @@ class SolveInterrupted(KeyboardInterrupt):
         return VectorToArray(Eigen::Map<const Vector>(r.result.cost_history.data(),
                                                       static_cast<Eigen::Index>(r.result.cost_history.size())));
       }, "cost of the nominal after each accepted trial, the initial one first")
+      .def_property_readonly("stop_reason", [](const PySolveResult& r) { return r.result.stop_reason; },
+                             "why it stopped, with the figures of the deciding test")
       .def_readonly("interrupted", &PySolveResult::interrupted)
       .def("__repr__", [](const PySolveResult& r) {
         std::ostringstream s;
@@ -1033,5 +1068,39 @@ Ctrl-C raises ddoc.SolveInterrupted (a KeyboardInterrupt) whose .result is the p
       .def_property_readonly("status", [](const PyLearner& l) { return LearnerStatusName(l.learner().status()); })
       .def_property_readonly("trials", [](const PyLearner& l) { return l.learner().trials(); })
       .def_property_readonly("iteration", [](const PyLearner& l) { return l.learner().iteration(); })
-      .def_property_readonly("settings", [](const PyLearner& l) { return l.learner().settings(); });
+      .def_property_readonly("settings", [](const PyLearner& l) { return l.learner().settings(); })
+      .def(
+          "feedback_law",
+          [](const PyLearner& l, double alpha) {
+            if (!l.learner().initialized()) {
+              throw InvalidArgument("feedback_law: no nominal yet (call solve first)");
+            }
+            py::list modes;
+            for (const ModeFeedbackLaw& mode : l.learner().FeedbackLaw(alpha)) {
+              const auto N = static_cast<py::ssize_t>(mode.t.size());
+              const auto m = static_cast<py::ssize_t>(mode.u.rows());
+              const auto n = static_cast<py::ssize_t>(mode.x.rows());
+              py::array_t<double> K({N, m, n});
+              auto k = K.mutable_unchecked<3>();
+              for (py::ssize_t j = 0; j < N; ++j) {
+                for (py::ssize_t i = 0; i < m; ++i) {
+                  for (py::ssize_t c = 0; c < n; ++c) k(j, i, c) = mode.K[j](i, c);
+                }
+              }
+              py::dict d;
+              d["t"] = VectorToArray(mode.t);
+              d["x"] = py::cast(Matrix(mode.x.transpose()));
+              d["u"] = py::cast(Matrix(mode.u.transpose()));
+              d["u_ff"] = py::cast(Matrix(mode.u_ff.transpose()));
+              d["K"] = K;
+              modes.append(d);
+            }
+            return modes;
+          },
+          py::arg("alpha") = 1.0,
+          R"(The converged nominal's feedback law in physical time, one dict per mode: t (N,),
+x (N, n), u (N, m), u_ff (N, m) and K (N, m, n), with u(t) = u_ff(t) + K(t) x(t) =
+u(t)_nominal + K(t) (x - x_nominal) + the remaining feed-forward step (~0 at convergence);
+K = -H^-1 (L_ux + F_u' P), for an LQ problem the continuous-time LQR gain -R^-1 (B'S + N).
+alpha: that of Learner::ConvergedPolicy (1: what OC-FB applies; 0: no feed-forward step).)");
 }

@@ -7,6 +7,7 @@
 
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "ddoc/backward_pass.h"
@@ -62,16 +63,18 @@ struct LearnerSettings {
   AlphaAfterAccept alpha_after_accept = AlphaAfterAccept::kRatio;
   double alpha_min = 1e-6;      ///< line search fails (terminated) when alpha drops below
   /// Convergence (default preset): the full step's predicted gain (the Newton decrement,
-  /// -dI_pred(1)) at most convergence_tolerance (|I| + 1e-6 |I^0|). Default 1e-9.
+  /// -dI_pred(1)) at most convergence_tolerance |I| of the current cost, plus the rounding of
+  /// the gain's terms (64 eps their magnitude); never relative to the start. Default 1e-9.
   double convergence_tolerance = 1e-9;
   /// Algorithm 1's convergence test instead (the paper preset): int |du|^2 dtau + |dT|^2 <=
   /// epsilon for the last delta_i accepted iterations. Default off.
   bool step_convergence = false;
   double epsilon = 1e-8;        ///< threshold of the step test
   int delta_i = 2;              ///< Delta i of the step test
-  /// The guard of both tests: no convergence while the first-order optimality
-  /// (ComputeOptimality: the projected gradient w.r.t. u(.) and T) is above this fraction of its
-  /// value at the initial nominal. Default 1e-3.
+  /// The guard of the step test (step_convergence): no convergence while the first-order
+  /// optimality (ComputeOptimality: the projected gradient w.r.t. u(.) and T) is above this
+  /// fraction of its value at the initial nominal. Default 1e-3. (The default preset's
+  /// Newton-decrement test is the projected gradient in the model's metric and needs none.)
   double optimality_tolerance = 1e-3;
   /// Floor of the Levenberg-Marquardt regularization mu of H = L_uu + mu I (units of
   /// L_uu = D l_uu): mu starts here, grows 10x when the backward pass fails (not positive
@@ -113,7 +116,10 @@ struct LearnerSettings {
   /// false (the pass's gains, the paper). docs/engine.md, "The trial's feedback".
   bool blend_feedback = false;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
-  int max_samples = 20000;      ///< preallocation: most samples of one trajectory (all modes)
+  /// Preallocation: most samples of one trajectory (all modes). Solve raises it, before the
+  /// first trial, to 1.25x the initial trial's samples + 8 K when that trial has more (e.g. 12 s
+  /// at dt = 5e-4: 24012); the incremental API (Initialize) names it in its error. Default 20000.
+  int max_samples = 20000;
   BackwardPassSettings backward;         ///< (30)
   SwitchingTimeSettings switching;       ///< (31)
   OnlineControllerSettings controller;   ///< (33)-(34)
@@ -183,6 +189,24 @@ struct SolveResult {
   Vector T;                        ///< K: switching instants of the final nominal
   Optimality optimality;           ///< of the final nominal
   std::vector<double> cost_history;  ///< cost of the nominal after each accepted trial (incl. 0)
+  /// Why it stopped, in words with the figures of the test that decided (Learner::StopReason),
+  /// e.g. "converged: the full step's predicted decrease 3e-12 is at most 1.2e-09 (1e-09 of
+  /// the current cost 1.18 ...)".
+  std::string stop_reason;
+};
+
+/// The affine feedback law of one mode in physical time, at the nominal's samples:
+///   u(t) = u_ff(t) + K(t) x(t) = u_nominal(t) + K(t) (x(t) - x_nominal(t)) + u_step(t),
+/// K = -H^{-1} (L_ux + F_u^T P_xx) (the continuous-time LQR gain -R^{-1} (B^T S + N) for a
+/// linear system with a quadratic cost: the time normalization scales H and the gain alike),
+/// u_step = -H^{-1} c the remaining feed-forward step of (34) (~0 at convergence). Before the
+/// box of (35): an input on a bound is clipped by the plant's QP, not by this law.
+struct ModeFeedbackLaw {
+  Vector t;               ///< N_k sample times (s, the nominal's)
+  Matrix x;               ///< n_k x N_k nominal states
+  Matrix u;               ///< m x N_k nominal inputs
+  Matrix u_ff;            ///< m x N_k feed-forward: u_nominal + u_step - K x_nominal
+  std::vector<Matrix> K;  ///< N_k gains, each m x n_k (input per unit state)
 };
 
 /// Algorithm 1 bookkeeping around BackwardPass, SolveSwitchingTimeUpdate and OnlineController.
@@ -246,6 +270,15 @@ class Learner {
   /// CompleteTrial (or Initialize) and NextTrial.
   void RecomputeDirection();
 
+  /// Reallocates for trajectories of `samples` samples (+ 25 % + 8 K) when settings().max_samples
+  /// is smaller, raising it (Solve calls it with the initial trial's count). Allocates; call
+  /// before Initialize (it discards the pass and the loaded laws).
+  void ReserveSamples(int samples);
+
+  /// Throws InvalidArgument when the planned durations of `initial_policy` (all finite) do not
+  /// add up to a fixed final time (to 1e-9 relative). Solve calls it first.
+  void CheckInitialPolicy(const Policy& initial_policy) const;
+
   /// The law that produced the initial nominal (u^0), for blend_feedback before the first
   /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.
   void SetInitialLaw(const OnlineController* law) { initial_law_ = law; }
@@ -262,7 +295,16 @@ class Learner {
   /// dx", whether or not the gradient L_u + F_u^T p has vanished.
   OnlineController& ConvergedPolicy(double alpha = 1.0);
 
+  /// The law of ConvergedPolicy(alpha) as K(t) and u_ff(t) per mode, in physical time
+  /// (ModeFeedbackLaw). Allocates; call between trials. Throws before Initialize.
+  std::vector<ModeFeedbackLaw> FeedbackLaw(double alpha = 1.0) const;
+
   LearnerStatus status() const { return status_; }
+  /// The status in words a user can act on, with the figures of the test that decided it (the
+  /// predicted decrease of the full step against the current cost, alpha against alpha_min,
+  /// the trial budget: "stopped: max_trials = N reached; ..." once trials() reaches it).
+  /// Formats on demand (allocates); not for a real-time loop.
+  std::string StopReason() const;
   /// Initialize has run (NextTrial and CompleteTrial may be called).
   bool initialized() const { return initialized_; }
   bool converged() const { return status_ == LearnerStatus::kConverged; }
@@ -317,6 +359,9 @@ class Learner {
   void AddNominalSample(double cost);
   // The status after a new nominal: converged when the optimality (and step) tests hold.
   void UpdateConvergence();
+  // The Newton decrement -dI_pred(1) of the current pass (the full step's predicted gain) and,
+  // in *bound, what convergence allows: convergence_tolerance |I^i| plus the gain's rounding.
+  double PredictedGain(double* bound) const;
   // The trial `measured` (run with controllers_[active_]) becomes the nominal with cost `cost`:
   // itself, or its re-run on direction_plant when one is given (mRL).
   bool AdoptTrial(const Trajectory& measured, Plant* direction_plant, double cost);

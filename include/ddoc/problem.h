@@ -24,12 +24,21 @@ struct Bounds {
   Vector u_min;         ///< m, entries in [-inf, inf), default none (set them)
   Vector u_max;         ///< m, entries in (-inf, inf], >= u_min
   Vector duration_min;  ///< K, each > 0
-  Vector duration_max;  ///< K, each >= duration_min, finite
+  /// K, each >= duration_min, finite; with a finite final_time_max entries may be +inf or the
+  /// vector empty (default): the duration is then bounded by the final time (MaxDuration).
+  Vector duration_max;
   double final_time_min = 0.0;  ///< s, lower bound on T_{K-1}; default 0 (none)
   double final_time_max = std::numeric_limits<double>::infinity();  ///< s; default inf (none)
 
   /// Fixes the final time: final_time_min = final_time_max = t_final (s).
   void FixFinalTime(double t_final) { final_time_min = final_time_max = t_final; }
+  /// The upper bound of mode k's duration in effect: min(duration_max(k) (inf when
+  /// duration_max is empty), final_time_max), in s.
+  double MaxDuration(int k) const {
+    const double d = duration_max.size() > k ? duration_max(k)
+                                             : std::numeric_limits<double>::infinity();
+    return d < final_time_max ? d : final_time_max;
+  }
   /// True when the final time is boxed (a finite upper or a positive lower bound).
   bool final_time_bounded() const {
     return final_time_min > 0.0 || final_time_max < std::numeric_limits<double>::infinity();
@@ -42,7 +51,9 @@ struct Problem {
   const SwitchedSystem* system = nullptr;  ///< the (possibly inexact) model f_k, g_k, h_k
   const SwitchedCost* cost = nullptr;      ///< l_k, phi_k
   Bounds bounds;                           ///< (6)-(7)
-  Vector surface_weights;                  ///< w_k of (8), size K, >= 0; 0 = no penalty
+  /// w_k of (8), size K, >= 0; 0 = no penalty. Empty (the default) = all 0, allowed when no
+  /// mode has a switching surface.
+  Vector surface_weights;
 
   /// Throws InvalidArgument naming the first problem found: null system/cost, K == 0,
   /// size mismatches (u bounds vs m, duration bounds and weights vs K), reversed bounds
@@ -50,11 +61,15 @@ struct Problem {
   /// weights, duration_min <= 0, negative weights, a positive weight on a mode without surface
   /// (s_k == 0), a final-time box that is reversed, negative or NaN, or one that the duration
   /// bounds cannot meet (sum of duration_min > final_time_max or sum of duration_max <
-  /// final_time_min).
+  /// final_time_min), a cost defined for another number of modes than the system
+  /// (SwitchedCost::num_modes), or a QuadraticTrackingCost whose R_k is singular in a direction
+  /// of an unbounded input.
   void Validate() const;
 
   int num_modes() const { return system->num_modes(); }
   int input_dim() const { return system->input_dim(); }
+  /// w_k (0 when surface_weights is empty).
+  double SurfaceWeight(int k) const { return surface_weights.size() > k ? surface_weights(k) : 0.0; }
 };
 
 }  // namespace ddoc

@@ -102,6 +102,10 @@ class SwitchedCost {
  public:
   virtual ~SwitchedCost() = default;
 
+  /// Modes the cost is defined for, checked against the system's by Problem::Validate; 0
+  /// (default) = any number (a cost that does not know it).
+  virtual int num_modes() const { return 0; }
+
   /// l_k(x, u).
   double Running(int k, const ConstVectorRef& x, const ConstVectorRef& u) const;
   /// lx (n_k), lu (m), lxx (n_k x n_k), luu (m x m), lux (m x n_k).

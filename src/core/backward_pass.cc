@@ -468,7 +468,7 @@ void BackwardPass::JumpOrTerminal(int k, const Trajectory& nominal, bool cyclic)
   auto phiz = phiz_.head(n);
   auto phizz = phizz_.topLeftCorner(n, n);
   problem_->cost->SwitchingDerivatives(k, x, phiz, phizz);
-  const double wk = problem_->surface_weights(k);
+  const double wk = problem_->SurfaceWeight(k);
   if (wk > 0) {  // surface penalty (8), Gauss-Newton Hessian
     const int sk = sys.surface_dim(k);
     auto h = h_.head(sk);

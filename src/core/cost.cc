@@ -26,10 +26,10 @@ CostBreakdown EvaluateCost(const Problem& problem, const Trajectory& trajectory)
     }
     out.running(k) = running;
     out.switching(k) = cost.Switching(k, mode.x.col(N - 1));
-    if (problem.surface_weights(k) > 0) {
+    if (problem.SurfaceWeight(k) > 0) {
       Vector h(sys.surface_dim(k));
       sys.Surface(k, mode.x.col(N - 1), h);
-      out.surface(k) = problem.surface_weights(k) * h.squaredNorm();
+      out.surface(k) = problem.SurfaceWeight(k) * h.squaredNorm();
     }
   }
   out.total = out.running.sum() + out.switching.sum() + out.surface.sum();

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <string>
 
 namespace ddoc {
 namespace {
@@ -107,7 +109,7 @@ Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
     const double D = nominal.T(k) - nominal.ModeStart(k);
     const double tol = 1e-12 * std::max(1.0, D);
     lo(k) = D <= problem.bounds.duration_min(k) + tol ? 0.0 : -kInf;
-    hi(k) = D >= problem.bounds.duration_max(k) - tol ? 0.0 : kInf;
+    hi(k) = D >= problem.bounds.MaxDuration(k) - tol ? 0.0 : kInf;
   }
   const double TK = nominal.T(K - 1);
   const double ttol = 1e-12 * std::max(1.0, TK);
@@ -152,6 +154,35 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
   pass_.Allocate(problem, settings.max_samples, settings.backward);
   for (auto& c : controllers_) c.Allocate(problem, settings.max_samples, settings.controller);
   mu_ = settings.regularization_min;
+}
+
+void Learner::CheckInitialPolicy(const Policy& initial_policy) const {
+  const Bounds& bounds = problem_->bounds;
+  if (bounds.final_time_min == bounds.final_time_max) {
+    // A fixed final time: the initial plan must end there (the plant would stretch or cut the
+    // last mode silently).
+    double sum = 0;
+    bool finite = true;
+    for (int k = 0; k < problem_->num_modes(); ++k) {
+      const double d = initial_policy.PlannedDuration(k);
+      finite = finite && std::isfinite(d);
+      sum += d;
+    }
+    if (finite && std::abs(sum - bounds.final_time_max) > 1e-9 * std::max(1.0, sum)) {
+      throw InvalidArgument("Learner: the initial durations add up to " +
+                            std::to_string(sum) + " s, but the final time is fixed at " +
+                            std::to_string(bounds.final_time_max) + " s (Bounds::FixFinalTime)");
+    }
+  }
+}
+
+void Learner::ReserveSamples(int samples) {
+  if (samples <= settings_.max_samples) return;
+  // A margin for trials whose durations differ from the initial plan's (with a fixed final time
+  // the total moves by a few samples per mode).
+  settings_.max_samples = samples + samples / 4 + 8 * problem_->num_modes();
+  pass_.Allocate(*problem_, settings_.max_samples, settings_.backward);
+  for (auto& c : controllers_) c.Allocate(*problem_, settings_.max_samples, settings_.controller);
 }
 
 bool Learner::RunPass() {
@@ -270,32 +301,86 @@ void Learner::RecomputeDirection() {
   }
 }
 
+double Learner::PredictedGain(double* bound) const {
+  const SwitchingTimeStep full = SolveSwitchingTimeUpdate(
+      *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
+  const double a = pass_.predicted_linear(), b = pass_.predicted_quadratic();
+  const double gain = -(a + 0.5 * b + full.model_change);
+  // Relative to the current cost, so that neither the cost's units nor how bad the start was
+  // move the decision (|I| + 1e-6 |I^0| stopped a 1e46 start at 1e31, issue 47); the rounding
+  // of the gain's own terms is the absolute floor that lets an optimum of cost 0 converge.
+  const double rounding = 64 * std::numeric_limits<double>::epsilon() *
+                          (std::abs(a) + 0.5 * std::abs(b) + std::abs(full.model_change));
+  *bound = settings_.convergence_tolerance * std::abs(nominal_cost_) + rounding;
+  return gain;
+}
+
 void Learner::UpdateConvergence() {
-  // The guard of every test: the projected gradient must have come down by
-  // optimality_tolerance from the initial nominal.
-  const bool small_gradient =
-      optimality_.total <= settings_.optimality_tolerance * initial_optimality_.total;
   bool converged = false;
   if (settings_.step_convergence) {
-    // Algorithm 1's test: int |du|^2 + |dT|^2 <= epsilon for the last delta_i accepted trials.
+    // Algorithm 1's test: int |du|^2 + |dT|^2 <= epsilon for the last delta_i accepted trials,
+    // guarded by the projected gradient, which must have come down by optimality_tolerance
+    // from the initial nominal (a zero step at a bound is no convergence).
+    const bool small_gradient =
+        optimality_.total <= settings_.optimality_tolerance * initial_optimality_.total;
     const int n = static_cast<int>(step_history_.size());
     bool steps = n >= settings_.delta_i;
     for (int i = std::max(0, n - settings_.delta_i); i < n && steps; ++i) {
       steps = step_history_[i] <= settings_.epsilon;
     }
     converged = small_gradient && steps;
-  } else if (small_gradient) {
-    // The full step's predicted gain (the Newton decrement) below convergence_tolerance |I|.
-    const SwitchingTimeStep full = SolveSwitchingTimeUpdate(
-        *problem_, nominal_.T, pass_.P22_initial(), pass_.p2_initial(), 1.0, settings_.switching);
-    const double gain = -(pass_.predicted_linear() + 0.5 * pass_.predicted_quadratic() +
-                          full.model_change);
-    // Relative to the cost, so that a problem with its cost scaled by c converges where the
-    // unscaled one does; the initial cost's 1e-6 lets a problem whose optimum is 0 converge.
-    const double scale = std::abs(nominal_cost_) + 1e-6 * std::abs(initial_cost_);
-    converged = gain <= settings_.convergence_tolerance * scale;
+  } else {
+    // The full step's predicted gain (the Newton decrement, the projected gradient in the
+    // model's metric, bounds included) against the current cost only.
+    double bound = 0;
+    converged = PredictedGain(&bound) <= bound;
   }
   status_ = converged ? LearnerStatus::kConverged : LearnerStatus::kRunning;
+}
+
+namespace {
+std::string Figure(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", value);
+  return buffer;
+}
+}  // namespace
+
+std::string Learner::StopReason() const {
+  if (!initialized_) return "not started: call Initialize or Solve";
+  const std::string cost = "the current cost " + Figure(nominal_cost_);
+  double bound = 0;
+  const double gain = PredictedGain(&bound);
+  const std::string gain_text = "the full step's predicted decrease " + Figure(gain);
+  const std::string optimality = "first-order optimality " + Figure(optimality_.total);
+  switch (status_) {
+    case LearnerStatus::kConverged:
+      if (settings_.step_convergence) {
+        return "converged: the last " + std::to_string(settings_.delta_i) +
+               " accepted steps are below epsilon = " + Figure(settings_.epsilon) + " (" +
+               optimality + ", " + cost + ")";
+      }
+      if (iteration_ == 0 && initial_optimality_.total == 0) {
+        return "converged: the initial nominal is stationary (" + optimality + ", " + cost + ")";
+      }
+      return "converged: " + gain_text + " is at most " + Figure(bound) +
+             " (convergence_tolerance " + Figure(settings_.convergence_tolerance) + " of " +
+             cost + "; " + optimality + ")";
+    case LearnerStatus::kLineSearchFailed:
+      return "stopped: the line search failed (alpha " + Figure(alpha_) + " below alpha_min " +
+             Figure(settings_.alpha_min) + ") at " + cost + "; " + gain_text +
+             " (convergence needs at most " + Figure(bound) + "), " + optimality +
+             ": the plant does not follow the model's step, or the problem is ill-posed";
+    case LearnerStatus::kMaxTrials:
+    case LearnerStatus::kRunning:
+      return (status_ == LearnerStatus::kRunning && trials_ < settings_.max_trials
+                  ? std::string("running: ")
+                  : "stopped: max_trials = " + std::to_string(settings_.max_trials) +
+                        " reached; ") +
+             gain_text + " is above " + Figure(bound) + " (convergence_tolerance " +
+             Figure(settings_.convergence_tolerance) + " of " + cost + "; " + optimality + ")";
+  }
+  return LearnerStatusName(status_);
 }
 
 void Learner::Initialize(const Trajectory& measured, const Trajectory* direction,
@@ -375,6 +460,42 @@ OnlineController& Learner::ConvergedPolicy(double alpha) {
   const int slot = accepted_ == active_ ? 1 - active_ : active_;
   controllers_[slot].Load(nominal_, pass_, alpha, Vector::Zero(problem_->num_modes()));
   return controllers_[slot];
+}
+
+std::vector<ModeFeedbackLaw> Learner::FeedbackLaw(double alpha) const {
+  if (!initialized_) throw InvalidArgument("Learner::FeedbackLaw: call Initialize first");
+  OnlineController law;
+  law.Allocate(*problem_, settings_.max_samples, settings_.controller);
+  law.Load(nominal_, pass_, alpha, Vector::Zero(problem_->num_modes()));
+  const OnlineControllerLaw plain = law.ExportLaw();
+  const int K = problem_->num_modes();
+  const Eigen::Index m = problem_->input_dim();
+  std::vector<ModeFeedbackLaw> out(static_cast<size_t>(K));
+  int s = 0;
+  for (int k = 0; k < K; ++k) {
+    const ModeTrajectory& mode = nominal_.modes[k];
+    const int N = mode.num_samples();
+    const Eigen::Index n = mode.x.rows();
+    ModeFeedbackLaw& o = out[static_cast<size_t>(k)];
+    o.t = mode.t;
+    o.x = mode.x;
+    o.u = mode.u;
+    o.u_ff.resize(m, N);
+    o.K.assign(static_cast<size_t>(N), Matrix::Zero(m, n));
+    for (int j = 0; j < N; ++j, ++s) {
+      if (m == 0) continue;
+      const Matrix H = Eigen::Map<const Matrix>(plain.huu.col(s).data(), m, m);
+      const Matrix G =
+          plain.feedback_factor * Eigen::Map<const Matrix>(plain.Kx.col(s).data(), m, n);
+      const Eigen::LDLT<Matrix> ldlt(H);
+      Matrix& gain = o.K[static_cast<size_t>(j)];
+      gain = -ldlt.solve(G);
+      const auto& scale = settings_.controller.state_feedback_scale;
+      if (!scale.empty()) gain *= scale[static_cast<size_t>(k)].asDiagonal();
+      o.u_ff.col(j) = mode.u.col(j) - ldlt.solve(Matrix(plain.c.col(s))) - gain * mode.x.col(j);
+    }
+  }
+  return out;
 }
 
 double Learner::InputDistance(const Trajectory& a, const Trajectory& b) {
@@ -551,13 +672,16 @@ TrialResult Learner::Reported(TrialResult r) const {
 SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const ConstVectorRef& x0,
                            Policy& initial_policy) {
   const bool same = &direction_plant == &cost_plant;
+  CheckInitialPolicy(initial_policy);
   Trajectory measured;
   cost_plant.Run(x0, initial_policy, &measured);
   if (same) {
+    ReserveSamples(measured.total_samples());
     Initialize(measured);
   } else {
     Trajectory direction;
     direction_plant.Run(x0, initial_policy, &direction);
+    ReserveSamples(std::max(measured.total_samples(), direction.total_samples()));
     Initialize(measured, &direction);
   }
   SolveResult result;
@@ -576,6 +700,7 @@ SolveResult Learner::Solve(Plant& direction_plant, Plant& cost_plant, const Cons
   result.cost = nominal_cost_;
   result.T = nominal_.T;
   result.optimality = optimality_;
+  result.stop_reason = StopReason();
   return result;
 }
 

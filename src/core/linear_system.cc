@@ -34,7 +34,16 @@ std::vector<int> CheckedStateDims(const std::vector<Matrix>& A, const std::vecto
       throw InvalidArgument("LinearSystem: A" + i + " is " + Shape(A[k]) +
                             ", expected square (n_k, n_k) with n_k > 0");
     }
-    if (B[k].rows() != A[k].rows() || B[k].cols() != B[0].cols()) {
+    if (B[k].rows() != A[k].rows()) {
+      // Name A[k] too: a wrong A[k] shows up as B[k]'s row count (issue 47).
+      throw InvalidArgument("LinearSystem: A" + i + " and B" + i + " disagree on mode " +
+                            std::to_string(k) + "'s state size: A" + i + " is " + Shape(A[k]) +
+                            " and B" + i + " is " + Shape(B[k]) + ", expected (" +
+                            std::to_string(A[k].rows()) + ", " + std::to_string(B[0].cols()) +
+                            "); or A" + i + " should be (" + std::to_string(B[k].rows()) + ", " +
+                            std::to_string(B[k].rows()) + ")");
+    }
+    if (B[k].cols() != B[0].cols()) {
       throw InvalidArgument("LinearSystem: B" + i + " is " + Shape(B[k]) + ", expected (" +
                             std::to_string(A[k].rows()) + ", " + std::to_string(B[0].cols()) +
                             ")");

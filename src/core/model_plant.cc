@@ -11,17 +11,20 @@ ModelPlant::ModelPlant(const SwitchedSystem& system, const Bounds& bounds,
                        const ModelPlantSettings& settings)
     : system_(&system), bounds_(bounds), settings_(settings) {
   const int K = system.num_modes();
-  if (bounds.duration_min.size() != K || bounds.duration_max.size() != K) {
+  const bool final_time_finite = std::isfinite(bounds.final_time_max);
+  if (bounds.duration_min.size() != K ||
+      (bounds.duration_max.size() != K && !(final_time_finite && bounds.duration_max.size() == 0))) {
     throw InvalidArgument("ModelPlant: duration bounds have sizes " +
                           std::to_string(bounds.duration_min.size()) + "/" +
                           std::to_string(bounds.duration_max.size()) + ", expected K = " +
                           std::to_string(K));
   }
   for (int k = 0; k < K; ++k) {
-    if (!(bounds.duration_min(k) > 0) || !(bounds.duration_min(k) <= bounds.duration_max(k)) ||
-        !std::isfinite(bounds.duration_max(k))) {
+    if (!(bounds.duration_min(k) > 0) || !(bounds.duration_min(k) <= bounds.MaxDuration(k)) ||
+        !std::isfinite(bounds.MaxDuration(k))) {
       throw InvalidArgument("ModelPlant: duration bounds of mode " + std::to_string(k) +
-                            " must satisfy 0 < min <= max < inf");
+                            " must satisfy 0 < min <= max < inf (max: duration_max, or "
+                            "final_time_max when smaller)");
     }
   }
   if (!(settings.dt > 0) || !std::isfinite(settings.dt)) {
@@ -76,7 +79,7 @@ void ModelPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) 
   int max_steps = 2;
   for (int k = 0; k < K; ++k) {
     max_steps = std::max(max_steps,
-                         static_cast<int>(std::ceil(bounds_.duration_max(k) / settings_.dt)) + 4);
+                         static_cast<int>(std::ceil(bounds_.MaxDuration(k) / settings_.dt)) + 4);
   }
   recorder_.Reserve(*system_, max_steps);
   policy.BeginTrial();
@@ -85,7 +88,7 @@ void ModelPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajectory* out) 
   double t = 0;
   for (int k = 0; k < K; ++k) {
     const double dmin = bounds_.duration_min(k);
-    const double dmax = bounds_.duration_max(k);
+    const double dmax = bounds_.MaxDuration(k);
     const bool time_based = TimeBased(k);
     double planned = policy.PlannedDuration(k);
     if (!std::isfinite(planned)) planned = dmax;

@@ -66,9 +66,10 @@ Matrix SymmetricPsd(const Matrix& M, const std::string& name) {
 
 QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<Vector> r,
                                              std::vector<Matrix> R, std::vector<double> rho,
-                                             std::vector<Matrix> S, std::vector<Vector> s)
-    : Q_(std::move(Q)), R_(std::move(R)), S_(std::move(S)), r_(std::move(r)), s_(std::move(s)),
-      rho_(std::move(rho)) {
+                                             std::vector<Matrix> S, std::vector<Vector> s,
+                                             std::vector<Matrix> N)
+    : Q_(std::move(Q)), R_(std::move(R)), S_(std::move(S)), N_(std::move(N)), r_(std::move(r)),
+      s_(std::move(s)), rho_(std::move(rho)) {
   const size_t K = Q_.size();
   if (K == 0 || r_.size() != K || R_.size() != K || rho_.size() != K || S_.size() != K ||
       s_.size() != K) {
@@ -77,6 +78,11 @@ QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<
                           std::to_string(R_.size()) + ", " + std::to_string(rho_.size()) + ", " +
                           std::to_string(S_.size()) + ", " + std::to_string(s_.size()) +
                           " entries, expected one per mode (K >= 1) in each");
+  }
+  if (!N_.empty() && N_.size() != K) {
+    throw InvalidArgument("QuadraticTrackingCost: N has " + std::to_string(N_.size()) +
+                          " entries, expected " + std::to_string(K) +
+                          " (one per mode, as Q) or none (no cross term)");
   }
   for (size_t k = 0; k < K; ++k) {
     const Eigen::Index n = Q_[k].rows();
@@ -98,6 +104,20 @@ QuadraticTrackingCost::QuadraticTrackingCost(std::vector<Matrix> Q, std::vector<
     S_[k] = SymmetricPsd(S_[k], Entry("S", k));
     Qr_.push_back(Q_[k] * r_[k]);
     Ss_.push_back(S_[k] * s_[k]);
+    if (!N_.empty()) {
+      const Eigen::Index m = R_[k].rows();
+      if (N_[k].rows() != m || N_[k].cols() != n) {
+        throw InvalidArgument("QuadraticTrackingCost: " + Entry("N", k) + " is " +
+                              std::to_string(N_[k].rows()) + " x " +
+                              std::to_string(N_[k].cols()) + ", expected " + std::to_string(m) +
+                              " x " + std::to_string(n) + " (m x n_k, as R[k] and Q[k])");
+      }
+      internal::CheckFiniteEntries(N_[k], "QuadraticTrackingCost: " + Entry("N", k));
+      Matrix joint(n + m, n + m);
+      joint << Q_[k], N_[k].transpose(), N_[k], R_[k];
+      SymmetricPsd(joint, "[Q N'; N R][" + std::to_string(k) + "]");
+      Nr_.push_back(N_[k] * r_[k]);
+    }
   }
 }
 
@@ -120,7 +140,15 @@ void QuadraticTrackingCost::Check(int k, const ConstVectorRef& x, const ConstVec
 double QuadraticTrackingCost::DoRunning(int k, const ConstVectorRef& x,
                                         const ConstVectorRef& u) const {
   Check(k, x, &u);
-  return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + rho_[k];
+  double cross = 0;
+  if (!N_.empty()) {
+    for (int j = 0; j < x.size(); ++j) {
+      const double dx = x(j) - r_[k](j);
+      for (int i = 0; i < u.size(); ++i) cross += u(i) * N_[k](i, j) * dx;
+    }
+  }
+  return HalfQuadraticForm(Q_[k], x, r_[k]) + HalfQuadraticForm(R_[k], u, Vector()) + cross +
+         rho_[k];
 }
 
 void QuadraticTrackingCost::DoRunningDerivatives(int k, const ConstVectorRef& x,
@@ -133,7 +161,17 @@ void QuadraticTrackingCost::DoRunningDerivatives(int k, const ConstVectorRef& x,
   if (u.size() > 0) lu.noalias() = R_[k] * u;
   lxx = Q_[k];
   luu = R_[k];
-  lux.setZero();
+  if (N_.empty()) {
+    lux.setZero();
+  } else {
+    // d/dx u' N (x - r) = N' u, d/du = N (x - r), d2/dudx = N.
+    lx.noalias() += N_[k].transpose() * u;
+    if (u.size() > 0) {
+      lu.noalias() += N_[k] * x;
+      lu -= Nr_[k];
+    }
+    lux = N_[k];
+  }
 }
 
 double QuadraticTrackingCost::DoSwitching(int k, const ConstVectorRef& x) const {

@@ -60,7 +60,9 @@ int SampleLayout::CheckCounts(const std::vector<int>& counts, const char* who) c
   }
   if (total > max_samples_) {
     throw InvalidArgument(std::string(who) + ": " + std::to_string(total) +
-                          " samples, more than max_samples = " + std::to_string(max_samples_));
+                          " samples, more than max_samples = " + std::to_string(max_samples_) +
+                          " (the size allocated; for a Learner LearnerSettings.max_samples: "
+                          "raise it to at least " + std::to_string(total) + ")");
   }
   return static_cast<int>(total);
 }
@@ -79,7 +81,9 @@ int SampleLayout::Commit(const char* what, const char* who) {
   }
   if (total > max_samples_) {
     throw InvalidArgument(std::string(who) + ": " + what + " has " + std::to_string(total) +
-                          " samples, more than max_samples = " + std::to_string(max_samples_));
+                          " samples, more than max_samples = " + std::to_string(max_samples_) +
+                          " (the size allocated; for a Learner LearnerSettings.max_samples: "
+                          "raise it to at least " + std::to_string(total) + ")");
   }
   total_ = total;
   return total;

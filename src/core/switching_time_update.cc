@@ -159,7 +159,7 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   Vector lo(K), hi(K);
   for (int k = 0; k < K; ++k) {
     lo(k) = Snap(problem.bounds.duration_min(k) - D(k), D(k));
-    hi(k) = Snap(problem.bounds.duration_max(k) - D(k), D(k));
+    hi(k) = Snap(problem.bounds.MaxDuration(k) - D(k), D(k));
     // A measured nominal may violate (7); the box then moves the plan back inside. The
     // optional step cap must not empty the box: then the bound nearest to 0 wins.
     const double l = std::max(lo(k), -settings.max_duration_step);

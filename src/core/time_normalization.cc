@@ -163,7 +163,7 @@ double TimeNormalization::Switching(int k, const ConstVectorRef& z) {
   const SwitchedSystem& sys = *problem_->system;
   const int n = sys.state_dim(k);
   double value = problem_->cost->Switching(k, z.head(n));
-  const double w = problem_->surface_weights(k);
+  const double w = problem_->SurfaceWeight(k);
   if (w > 0) {
     auto h = h_.head(sys.surface_dim(k));
     sys.Surface(k, z.head(n), h);
@@ -183,7 +183,7 @@ void TimeNormalization::SwitchingDerivatives(int k, const ConstVectorRef& z, Vec
   Phiz.setZero();
   Phizz.setZero();
   problem_->cost->SwitchingDerivatives(k, z.head(n), Phiz.head(n), Phizz.topLeftCorner(n, n));
-  const double w = problem_->surface_weights(k);
+  const double w = problem_->SurfaceWeight(k);
   if (w > 0) {
     const int s = sys.surface_dim(k);
     auto h = h_.head(s);

@@ -114,7 +114,7 @@ def test_cost_that_does_not_fit_the_system():
     bounds = ddoc.Bounds(u_min=[-1.0], u_max=[1.0], duration_min=[0.1, 0.1],
                          duration_max=[1.0, 1.0])
     one_mode = ddoc.QuadraticCost(Q=[np.eye(2)], R=[np.eye(1)])
-    with pytest.raises(ValueError, match="mode k=1, but Q has 1 entries"):
+    with pytest.raises(ValueError, match="the cost has 1 modes, the system 2"):
         ddoc.Learner(ddoc.Problem(system, one_mode, bounds)).solve([1.0, 0.0], [0.5, 0.5])
     three_states = ddoc.QuadraticCost(Q=[np.eye(3)] * 2, R=[np.eye(1)] * 2)
     with pytest.raises(ValueError, match="x has size 2"):
