@@ -3,6 +3,7 @@
 // ddoc-hopper end to end: exit codes, bad input before the simulation, incremental logs of a run
 // that falls, and rendering that does not change the simulation.
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <sys/wait.h>
 
 #include <cmath>
@@ -63,7 +64,8 @@ class CliTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::path(::testing::TempDir()) /
-           ("ddoc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("ddoc_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+            "_" + std::to_string(::getpid()));  // two suites may run at once
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

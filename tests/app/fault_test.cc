@@ -67,7 +67,8 @@ class FaultTest : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::path(::testing::TempDir()) /
            ("ddoc_fault_" +
-            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));  // two suites may run at once
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

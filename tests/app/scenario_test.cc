@@ -2,6 +2,7 @@
 #include "scenario.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -22,7 +23,7 @@ class ScenarioTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("ddoc_scenario_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+           ("ddoc_scenario_" + std::to_string(::getpid()) +
             "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
@@ -367,7 +368,8 @@ TEST(ParsePushTest, ByHopPhase) {
 }
 
 TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
-  const fs::path dir = fs::temp_directory_path() / "ddoc_runlog_test";
+  const fs::path dir =
+      fs::temp_directory_path() / ("ddoc_runlog_test_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   {
     RunLog log(dir.string(), "alg1");

@@ -4,6 +4,7 @@
 // the key changes with every input of the model solve; a corrupt, truncated or foreign file and
 // an unwritable directory make the controller solve (and say so), never fail or load bad data.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -25,9 +26,9 @@ class LawCacheTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("ddoc_law_cache_" + std::string(::testing::UnitTest::GetInstance()
-                                                ->current_test_info()
-                                                ->name()));
+           ("ddoc_law_cache_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(::getpid()));  // two suites may run at once
     fs::remove_all(dir_);
     // Robot reads $DDOC_LAW_CACHE when config.law_cache is empty: this test chooses its own.
     const char* env = std::getenv("DDOC_LAW_CACHE");
