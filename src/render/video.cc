@@ -57,6 +57,22 @@ std::string Join(const std::vector<std::string>& args) {
 }
 
 // Runs args[0] with args (no shell); stderr and stdout are captured into *output.
+// In a forked child: stdin from in_fd (unless -1), stdout and stderr into out_fd, both ends of
+// `pipe_fds` closed, then argv. Only async-signal-safe calls between fork and exec (the PNG writer
+// thread may run).
+[[noreturn]] void ExecChild(const std::vector<char*>& argv, int in_fd, int out_fd,
+                            const int pipe_fds[2]) {
+  if (in_fd >= 0) dup2(in_fd, STDIN_FILENO);
+  dup2(out_fd, STDOUT_FILENO);
+  dup2(out_fd, STDERR_FILENO);
+  close(pipe_fds[0]);
+  close(pipe_fds[1]);
+  execv(argv[0], argv.data());
+  static const char kExecFailed[] = "execv failed\n";
+  (void)!write(STDERR_FILENO, kExecFailed, sizeof(kExecFailed) - 1);
+  _exit(127);
+}
+
 // Returns the exit status, or -1 when the process could not be started.
 int Run(const std::vector<std::string>& args, std::string* output) {
   int pipe_fds[2];
@@ -78,15 +94,7 @@ int Run(const std::vector<std::string>& args, std::string* output) {
     // Child: stdin from /dev/null (ffmpeg reads keys from stdin), stdout+stderr to pipe.
     const int null_fd = open("/dev/null", O_RDONLY);
     if (null_fd >= 0) dup2(null_fd, STDIN_FILENO);
-    dup2(pipe_fds[1], STDOUT_FILENO);
-    dup2(pipe_fds[1], STDERR_FILENO);
-    close(pipe_fds[0]);
-    close(pipe_fds[1]);
-    execv(argv[0], argv.data());
-    // Only async-signal-safe calls between fork and exec (the PNG writer thread may run).
-    static const char kExecFailed[] = "execv failed\n";
-    (void)!write(STDERR_FILENO, kExecFailed, sizeof(kExecFailed) - 1);
-    _exit(127);
+    ExecChild(argv, -1, pipe_fds[1], pipe_fds);
   }
   close(pipe_fds[1]);
   output->clear();
@@ -259,15 +267,7 @@ std::unique_ptr<VideoStream> VideoStream::Start(const std::string& mp4_path, int
     // Child: stdin from the pipe, stdout and stderr into the log file. Its own process group,
     // so a Ctrl-C on the terminal reaches ddoc-hopper only, which then closes the stream.
     setpgid(0, 0);
-    dup2(pipe_fds[0], STDIN_FILENO);
-    dup2(log_fd, STDOUT_FILENO);
-    dup2(log_fd, STDERR_FILENO);
-    close(pipe_fds[0]);
-    close(pipe_fds[1]);
-    execv(argv[0], argv.data());
-    static const char kExecFailed[] = "execv failed\n";
-    (void)!write(STDERR_FILENO, kExecFailed, sizeof(kExecFailed) - 1);
-    _exit(127);
+    ExecChild(argv, pipe_fds[0], log_fd, pipe_fds);
   }
   close(pipe_fds[0]);
   fcntl(pipe_fds[1], F_SETFD, FD_CLOEXEC);

@@ -11,6 +11,7 @@
 #include "ddoc/check_derivatives.h"
 #include "ddoc/hopper/hop_simulator.h"
 #include "flight_energy.h"
+#include "random_states.h"
 
 namespace ddoc {
 namespace {
@@ -19,29 +20,9 @@ using testing::FlightEnergy;
 using V14 = Eigen::Matrix<double, 14, 1>;
 using V10 = Eigen::Matrix<double, 10, 1>;
 
-// A random but physically sensible flight / stance state and input (fixed seed).
-V14 RandomFlight(std::mt19937* rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  V14 x;
-  x << 0.3 * u(*rng), 0.8 + 0.1 * u(*rng), 0.3 * u(*rng), 0.2 * u(*rng), 0.7 + 0.02 * u(*rng),
-      80 + 50 * u(*rng), 2000 + 200 * u(*rng), u(*rng), u(*rng), u(*rng), u(*rng), 0.5 * u(*rng),
-      10 * u(*rng), 100 * u(*rng);
-  return x;
-}
-V10 RandomStance(std::mt19937* rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  V10 x;
-  x << 0.3 * u(*rng), 0.2 * u(*rng), 0.65 + 0.04 * u(*rng), 80 + 50 * u(*rng),
-      2000 + 200 * u(*rng), u(*rng), u(*rng), u(*rng), 10 * u(*rng), 100 * u(*rng);
-  return x;
-}
-Eigen::Vector4d RandomInput(std::mt19937* rng) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const Eigen::Vector4d lo = hopper::InputLowerBound(), hi = hopper::InputUpperBound();
-  Eigen::Vector4d v;
-  for (int i = 0; i < 4; ++i) v(i) = lo(i) + (hi(i) - lo(i)) * u(*rng);
-  return v;
-}
+using testing::RandomFlight;
+using testing::RandomInput;
+using testing::RandomStance;
 
 HopperParams DragParams() {
   HopperParams p;
