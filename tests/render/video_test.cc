@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -45,27 +46,39 @@ class ScopedPath {
 
 class VideoTest : public RenderTest {
  protected:
-  // Records 0.25 s at 20 fps (6 frames) of the pushed test model into dir_/frames.
-  void RecordFrames() {
-    auto m = testing::LoadModel(testing::TestModelXml(true));
-    auto d = testing::MakeData(m.get());
-    RenderSettings s;
-    s.dir = (dir_ / "frames").string();
-    s.width = 95;  // odd sizes: AssembleVideo pads to even for yuv420p
+  // Records 0.25 s at 20 fps (6 frames, 95 x 71: odd sizes, which AssembleVideo pads to even for
+  // yuv420p) of the pushed test model to `s`'s destinations (dir, video); the recorder is
+  // finished. The test has failed when it returns null.
+  std::unique_ptr<FrameRecorder> Record(RenderSettings s) {
+    model_ = testing::LoadModel(testing::TestModelXml(true));
+    auto d = testing::MakeData(model_.get());
+    s.width = 95;
     s.height = 71;
     s.fps = 20;
     std::string error;
-    auto rec = FrameRecorder::Create(m.get(), s, &error);
-    ASSERT_NE(rec, nullptr) << error;
-    rec->MaybeCapture(m.get(), d.get(), Overlay());
+    auto rec = FrameRecorder::Create(model_.get(), s, &error);
+    EXPECT_NE(rec, nullptr) << error;
+    if (rec == nullptr) return nullptr;
+    rec->MaybeCapture(model_.get(), d.get(), Overlay());
     while (d->time < 0.25 - 1e-9) {
       d->ctrl[0] = 1;
-      mj_step(m.get(), d.get());
-      rec->MaybeCapture(m.get(), d.get(), Overlay());
+      mj_step(model_.get(), d.get());
+      rec->MaybeCapture(model_.get(), d.get(), Overlay());
     }
-    ASSERT_TRUE(rec->Finish(&error)) << error;
+    const bool finished = rec->Finish(&error);
+    EXPECT_TRUE(finished) << error;
+    return finished ? std::move(rec) : nullptr;
+  }
+  // Records the 6 frames into dir_/frames.
+  void RecordFrames() {
+    RenderSettings s;
+    s.dir = (dir_ / "frames").string();
+    const auto rec = Record(s);
+    ASSERT_NE(rec, nullptr);
     ASSERT_EQ(rec->frame_count(), 6);
   }
+
+  std::unique_ptr<mjModel, void (*)(mjModel*)> model_{nullptr, mj_deleteModel};  // outlives rec
 };
 
 TEST_F(VideoTest, FindExecutableSearchesThePathList) {
@@ -130,23 +143,10 @@ TEST_F(VideoTest, StreamsFramesIntoAnMp4WithoutPngFiles) {
   if (FindExecutable("ffmpeg", path ? path : "").empty()) {
     GTEST_SKIP() << "ffmpeg is not installed";
   }
-  auto m = testing::LoadModel(testing::TestModelXml(true));
-  auto d = testing::MakeData(m.get());
   RenderSettings s;
   s.video = (dir_ / "videos" / "run.mp4").string();  // its directory is created
-  s.width = 95;
-  s.height = 71;
-  s.fps = 20;
-  std::string error;
-  auto rec = FrameRecorder::Create(m.get(), s, &error);
-  ASSERT_NE(rec, nullptr) << error;
-  rec->MaybeCapture(m.get(), d.get(), Overlay());
-  while (d->time < 0.25 - 1e-9) {
-    d->ctrl[0] = 1;
-    mj_step(m.get(), d.get());
-    rec->MaybeCapture(m.get(), d.get(), Overlay());
-  }
-  ASSERT_TRUE(rec->Finish(&error)) << error;
+  const auto rec = Record(s);
+  ASSERT_NE(rec, nullptr);
   EXPECT_NE(rec->video_message().find("wrote " + s.video + " (6 frames"), std::string::npos)
       << rec->video_message();
   ASSERT_TRUE(fs::exists(s.video));
