@@ -107,6 +107,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.remeasure) learner.remeasure_nominal = *l.remeasure;
   if (l.noise_margin) learner.noise_margin = *l.noise_margin;
   if (l.hops_per_trial) config.driver.runs_per_trial = *l.hops_per_trial;
+  if (l.verify_hops) config.driver.guard.verify_trials = *l.verify_hops;
+  if (l.verify_margin) config.driver.guard.margin = *l.verify_margin;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.start_correction) learner.start_correction = *l.start_correction;
   if (l.restart_alpha) learner.restart_alpha = *l.restart_alpha;
@@ -163,7 +165,8 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--robot", robot, "robot MJCF (overrides the scenario)");
   cli->add_option("--robot-variant", robot_variant,
                   "the robot's numbers: KEY=VALUE,... with mass (torso, kg), j_body (kg m^2), c_d "
-                  "(drag, kg/m), beta (VSA bandwidth, rad/s), e.g. mass=11,c_d=0.02");
+                  "(drag, kg/m), beta (VSA bandwidth, rad/s), hip_gain, leg_gain (motor strength, 1 = as "
+                  "commanded), e.g. mass=11,c_d=0.02");
   cli->add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
   cli->add_option("--push", pushes,
                   "extra push TIME,FORCE,DURATION (s, N, s), or HOP@PHASE,FORCE,DURATION by the "

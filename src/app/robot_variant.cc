@@ -88,13 +88,35 @@ void Inline(tinyxml2::XMLDocument* out, tinyxml2::XMLElement* parent, const std:
   }
 }
 
-tinyxml2::XMLElement* FindBody(tinyxml2::XMLElement* e, const char* name) {
+// The first element <tag name="name"> below e, depth first.
+tinyxml2::XMLElement* FindNamed(tinyxml2::XMLElement* e, const char* tag, const char* name) {
   for (tinyxml2::XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) {
     const char* n = c->Attribute("name");
-    if (std::string(c->Name()) == "body" && n != nullptr && std::string(n) == name) return c;
-    if (tinyxml2::XMLElement* found = FindBody(c, name)) return found;
+    if (std::string(c->Name()) == tag && n != nullptr && std::string(n) == name) return c;
+    if (tinyxml2::XMLElement* found = FindNamed(c, tag, name)) return found;
   }
   return nullptr;
+}
+
+// Makes the actuator `name` (a <motor> or <general>) deliver `gain` times what it is commanded:
+// a <motor> becomes the <general> it stands for (gainprm 1, no bias) with gainprm[0] scaled. The
+// gear stays (the controller checks it as a sign convention and does not read the gain).
+void ScaleGain(tinyxml2::XMLElement* root, const std::string& path, const char* name,
+               double gain) {
+  tinyxml2::XMLElement* actuator = FindNamed(root, "motor", name);
+  if (actuator != nullptr) {
+    actuator->SetName("general");
+  } else {
+    actuator = FindNamed(root, "general", name);
+  }
+  if (actuator == nullptr) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <motor name=\"" + name +
+                             "\"> to set the strength of");
+  }
+  std::istringstream in(actuator->Attribute("gainprm") ? actuator->Attribute("gainprm") : "1");
+  std::string gainprm;
+  for (double g; in >> g;) gainprm += gainprm.empty() ? Number(g * gain) : " " + Number(g);
+  actuator->SetAttribute("gainprm", gainprm.c_str());
 }
 
 void SetNumeric(tinyxml2::XMLElement* root, const std::string& path, const char* name,
@@ -127,13 +149,16 @@ std::string RobotVariant::ToString() const {
   add("j_body", j_body);
   add("c_d", c_d);
   add("beta", beta);
+  add("hip_gain", hip_gain);
+  add("leg_gain", leg_gain);
   return out;
 }
 
 RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag) {
   RobotVariant v;
   auto fail = [&](const std::string& what) { throw std::invalid_argument(flag + ": " + what); };
-  if (text.empty()) fail("empty; expected KEY=VALUE,... with keys mass, j_body, c_d, beta");
+  const std::string keys = "mass, j_body, c_d, beta, hip_gain or leg_gain";
+  if (text.empty()) fail("empty; expected KEY=VALUE,... with keys " + keys);
   std::istringstream in(text);
   for (std::string item; std::getline(in, item, ',');) {
     const size_t eq = item.find('=');
@@ -148,8 +173,10 @@ RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag)
                                    : key == "j_body" ? &v.j_body
                                    : key == "c_d"    ? &v.c_d
                                    : key == "beta"   ? &v.beta
+                                   : key == "hip_gain" ? &v.hip_gain
+                                   : key == "leg_gain" ? &v.leg_gain
                                                      : nullptr;
-    if (field == nullptr) fail("unknown key \"" + key + "\"; expected mass, j_body, c_d or beta");
+    if (field == nullptr) fail("unknown key \"" + key + "\"; expected " + keys);
     if (*field) fail(key + " given twice");
     const bool ok = key == "c_d" ? x >= 0 : x > 0;
     if (!ok) fail(key + "=" + value + ", expected " + (key == "c_d" ? ">= 0" : "> 0"));
@@ -195,7 +222,7 @@ std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant
   Inline(&doc, doc.RootElement(), path, dir, 0);
   tinyxml2::XMLElement* root = doc.RootElement();
   if (variant.mass || variant.j_body) {
-    tinyxml2::XMLElement* torso = FindBody(root, "torso");
+    tinyxml2::XMLElement* torso = FindNamed(root, "body", "torso");
     tinyxml2::XMLElement* inertial = torso ? torso->FirstChildElement("inertial") : nullptr;
     if (inertial == nullptr) {
       throw std::runtime_error("robot MJCF '" + path +
@@ -210,6 +237,8 @@ std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant
   }
   if (variant.c_d) SetNumeric(root, path, "drag_cd", *variant.c_d);
   if (variant.beta) SetNumeric(root, path, "vsa_beta", *variant.beta);
+  if (variant.hip_gain) ScaleGain(root, path, "hip_motor", *variant.hip_gain);
+  if (variant.leg_gain) ScaleGain(root, path, "leg_motor", *variant.leg_gain);
   tinyxml2::XMLPrinter printer;
   doc.Print(&printer);
   return printer.CStr();

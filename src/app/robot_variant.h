@@ -17,12 +17,16 @@ struct RobotVariant {
   std::optional<double> j_body;  ///< torso diaginertia (all three), kg m^2, > 0
   std::optional<double> c_d;     ///< <numeric name="drag_cd">, air drag of (38), kg/m, >= 0
   std::optional<double> beta;    ///< <numeric name="vsa_beta">, stiffness bandwidth, rad/s, > 0
-  bool empty() const { return !mass && !j_body && !c_d && !beta; }
+  /// Strength of the hip motor: its gainprm[0] times this (0.8 = delivers 80 % of the commanded
+  /// torque; the model does not know), > 0.
+  std::optional<double> hip_gain;
+  std::optional<double> leg_gain;  ///< strength of the leg motor, as hip_gain, > 0
+  bool empty() const { return !mass && !j_body && !c_d && !beta && !hip_gain && !leg_gain; }
   /// "mass=11,c_d=0.02" (the keys set, in this order).
   std::string ToString() const;
 };
 
-/// Parses "KEY=VALUE,..." with keys mass, j_body, c_d, beta. Throws std::invalid_argument naming
+/// Parses "KEY=VALUE,..." with keys mass, j_body, c_d, beta, hip_gain, leg_gain. Throws std::invalid_argument naming
 /// the flag (`flag`), the key or value and the bound ("--robot-variant: mass=-1, expected > 0").
 RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag);
 
