@@ -48,6 +48,7 @@ struct HopReport {
   double start_shift = 0.0;  ///< TrialOutcome::start_shift: the start correction of (36)
   bool restarted = false;    ///< TrialOutcome::restarted: the line search restarted after it
   bool remeasured = false;   ///< TrialOutcome::remeasured: the hop re-ran the nominal's law
+  bool reverted = false;     ///< TrialOutcome::reverted: the harm guard abandoned the law after it
   /// TrialOutcome::nominal_cost: the I^i that learner_cost was compared with (NaN: not judged)
   double nominal_cost = std::numeric_limits<double>::quiet_NaN();
   /// TrialOutcome::predicted: the predicted change dI_pred(alpha) of the trial (NaN: not judged)

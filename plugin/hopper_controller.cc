@@ -486,6 +486,7 @@ void HopperController::TakeOfflineResult() {
     w.report.start_shift = outcome_.start_shift;
     w.report.restarted = outcome_.restarted;
     w.report.remeasured = outcome_.remeasured;
+    w.report.reverted = outcome_.reverted;
     w.report.nominal_cost = outcome_.nominal_cost;
     w.report.predicted = outcome_.predicted;
     w.report.optimality = outcome_.optimality;

@@ -66,6 +66,7 @@ const HopColumn kHopColumns[] = {
     {"predicted", false, [](const HopReport& h) { return h.predicted; }},
     {"optimality", false, [](const HopReport& h) { return h.optimality; }},
     {"stance_mass", false, [](const HopReport& h) { return h.stance_mass; }},
+    {"reverted", true, [](const HopReport& h) { return h.reverted ? 1.0 : 0.0; }},
     {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
     {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
 };
@@ -439,7 +440,7 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
-learner_cost, nominal_cost, predicted, optimality, stance_mass) and offline_ms, latency_ms (the
+learner_cost, nominal_cost, predicted, optimality, stance_mass, reverted) and offline_ms, latency_ms (the
 wall time of the hop's offline part and the simulated latency of its law); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written) and initial_law (where u^0 came from, as summary.json's

@@ -429,6 +429,8 @@ def converged_hop(hops, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I):
     for k in range(len(hops["hop"])):
         if not hops["accepted"][k] > 0.5:
             continue
+        if hops.has("remeasured") and hops["remeasured"][k] > 0.5:
+            continue  # a re-run of the nominal's law, not an iteration
         d = hops["du2"][k] + hops["dT2"][k]
         if math.isfinite(d) and d <= eps:
             streak += 1
@@ -847,7 +849,9 @@ def result_row(run, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I, tail=0):
     row["converged_hop"], row["converged_src"] = conv, conv_src
     row["stopped_hop"] = run.summary.get("stopped_hop")
     # Learning trials are the hops run with alpha > 0 (warm-up hops and OC-FB run alpha = 0).
-    learned = (h["accepted"] > 0) & (h["alpha"] > 0) if n else []
+    # Re-runs of a law (remeasured: the harm guard's or remeasure_nominal's) are not trials.
+    rerun = (h["remeasured"] > 0) if n and h.has("remeasured") else False
+    learned = (h["accepted"] > 0) & (h["alpha"] > 0) & ~rerun if n else []
     row["accepted"] = (int(np.count_nonzero(learned))
                        if run.summary.get("learner_status", "") != "none" and run.method != "ocfb"
                        else None)

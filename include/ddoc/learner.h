@@ -209,6 +209,19 @@ struct ModeFeedbackLaw {
   std::vector<Matrix> K;  ///< N_k gains, each m x n_k (input per unit state)
 };
 
+/// A nominal the learner can go back to (Learner::Save, Learner::Restore): the trajectory, its
+/// cost I^i and the law that produced it. TrialDriver's harm guard keeps two.
+struct LearnerCheckpoint {
+  bool valid = false;           ///< Save() filled it
+  Trajectory nominal;           ///< x^i, u^i, T^i
+  double cost = 0;              ///< I^i
+  double own_cost = 0;          ///< start_correction: its cost under the reference it was adopted with
+  bool initial = true;          ///< produced by the initial law (no accepted trial)
+  OnlineController law;         ///< the accepted trial's law that produced it (unused when initial)
+  Trajectory previous_nominal;  ///< use_previous_du: the nominal before it
+  Matrix du_prev;               ///< use_previous_du: the control variation that led to it
+};
+
 /// Algorithm 1 bookkeeping around BackwardPass, SolveSwitchingTimeUpdate and OnlineController.
 ///
 /// Two roles of trajectories (DESIGN.md, "one engine, three methods"):
@@ -278,6 +291,23 @@ class Learner {
   /// Throws InvalidArgument when the planned durations of `initial_policy` (all finite) do not
   /// add up to a fixed final time (to 1e-9 relative). Solve calls it first.
   void CheckInitialPolicy(const Policy& initial_policy) const;
+
+  /// The current nominal as a checkpoint (copies the trajectory and its law; allocates).
+  LearnerCheckpoint Save() const;
+  /// Goes back to a checkpoint's nominal: it becomes the nominal with its cost and law, the
+  /// pending trial (if any) is dropped, (30) runs along it under the cost's current reference,
+  /// and the line search restarts (alpha <- restart_alpha, or alpha_initial when that is 0;
+  /// status running). iteration() and trials() keep counting. Allocates. Throws
+  /// InvalidArgument for a checkpoint Save() did not fill or whose pass fails.
+  void Restore(const LearnerCheckpoint& checkpoint);
+  /// Sets I^i, the cost trials are compared with (e.g. the mean of re-runs of the nominal's
+  /// law, free of the selection that made the accepted trial look good). Finite.
+  void SetNominalCost(double cost);
+  /// The law that produced the nominal: the accepted trial's; before any (nominal_is_initial)
+  /// the nominal's inputs with the pass's feedback (TrialDriver runs u^0 instead).
+  OnlineController& nominal_law() { return NominalLaw(); }
+  /// No trial accepted since Initialize (or since Restore of u^0's nominal).
+  bool nominal_is_initial() const { return accepted_ < 0; }
 
   /// The law that produced the initial nominal (u^0), for blend_feedback before the first
   /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.

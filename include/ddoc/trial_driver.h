@@ -27,6 +27,20 @@ enum class Method {
   kOcfb,  ///< OC-FB: the fallback law u^0 (a model-based optimum) every trial, no learning
 };
 
+/// The harm guard of TrialDriver (docs/engine.md, "Never keeping harm"): each accepted law is
+/// re-run before it is kept, and one that measures worse than the law it replaced, or than u^0,
+/// is abandoned for the better of the two.
+struct HarmGuardSettings {
+  /// Re-runs of each accepted law; their judged costs (the reported cost, TrialDriver::
+  /// CostReference with for_learner = false) are compared with the kept law's and u^0's. 0 = off
+  /// (default), else >= 2 (the spread is estimated from them).
+  int verify_trials = 0;
+  /// A law is abandoned when its mean judged cost exceeds the other's by more than `margin`
+  /// standard errors of the difference (spread pooled over every law's re-runs), >= 0.
+  /// Default 2.
+  double margin = 2.0;
+};
+
 /// Settings of TrialDriver.
 struct TrialDriverSettings {
   Method method = Method::kAlg1;  ///< which of the three methods; default Algorithm 1
@@ -38,6 +52,7 @@ struct TrialDriverSettings {
   /// engine.md, "Trials of several runs"). Warm-up runs before "Initialize" count once. Default 1.
   int runs_per_trial = 1;
   LearnerSettings learner;  ///< Algorithm 1 (unused by kOcfb); default LearnerSettings{}
+  HarmGuardSettings guard;  ///< re-runs of accepted laws and going back; default off
 };
 
 /// What the driver made of one completed trial.
@@ -64,6 +79,12 @@ struct TrialOutcome {
   /// TrialResult::optimality, the nominal's first-order optimality measure after the trial
   /// (ComputeOptimality); NaN for trials the learner did not see.
   double optimality = std::numeric_limits<double>::quiet_NaN();
+  /// The harm guard's judged cost of this trial: the reported cost (CostReference with
+  /// for_learner = false); NaN when the guard is off.
+  double judged_cost = std::numeric_limits<double>::quiet_NaN();
+  /// The guard abandoned the law after this trial (a re-run showed it worse than the kept law
+  /// or u^0) and the learner went back to the better one.
+  bool reverted = false;
   /// runs_per_trial > 1: this run is not the trial's last; the law runs again and the learner
   /// has not seen the run yet (`cost` is this run's).
   bool repeats = false;
@@ -134,6 +155,11 @@ class TrialDriver {
   std::vector<TrialOutcome> Run(Plant& plant, const ConstVectorRef& x0, int trials,
                                 const NextStart& next_start = nullptr);
 
+  /// Re-runs of the last accepted law still to come (harm guard); 0 when not verifying.
+  int verifying() const { return verify_left_; }
+  /// Laws the harm guard abandoned so far.
+  int reverts() const { return reverts_; }
+
   /// The learner (null for OC-FB).
   const Learner* learner() const { return learner_.get(); }
   const TrialDriverSettings& settings() const { return settings_; }
@@ -152,6 +178,44 @@ class TrialDriver {
   OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
   int trial_ = 0;
   bool frozen_ = false;
+  // Harm guard: judged costs of a law's runs (count, sum, sum of squared deviations).
+  struct Runs {
+    int n = 0;
+    double sum = 0, ss = 0;
+    double mean() const { return sum / n; }
+    void Add(double x);
+  };
+  enum class Phase { kNone, kVerify, kChallenge };  // what the guard's runs are
+  enum class Target { kInitial, kKept, kPrevious };  // a law the guard may go back to
+  // The guard's part of CompleteTrial: a re-run of the accepted law or of the law it is
+  // compared with, and the decision after the last.
+  TrialOutcome Verify(const Trajectory& measured);
+  // The kept law's learning trials: a window of judged costs, and a challenge when it is worse.
+  void Watch(double judged);
+  // Runs `against` verify_trials times to compare the law on trial (new_runs_) with it.
+  void Challenge(Target against, bool watch);
+  void KeepNew();  // the accepted law passed: it becomes the kept law
+  double JudgedCost(const Trajectory& measured, bool learns);
+  // a's mean judged cost exceeds b's by more than margin standard errors.
+  bool WorseThan(const Runs& a, const Runs& b) const;
+  void Pool(const Runs& runs);  // adds a finished law's runs to the pooled spread
+  const LearnerCheckpoint& Checkpoint(Target t) const;
+  Runs& RunsOf(Target t);
+  Phase phase_ = Phase::kNone;
+  Target target_ = Target::kInitial;  // the law of a challenge
+  bool watch_ = false;         // the challenge came from Watch (else from a verification)
+  int verify_left_ = 0;        // runs of the phase still to come
+  Runs new_runs_;              // judged costs of the law on trial
+  double new_learner_sum_ = 0; // its re-runs' learner costs (I^i of a kept law)
+  Runs other_runs_;            // the challenge's fresh runs
+  LearnerCheckpoint initial_, kept_, previous_;  // u^0's nominal, the kept one, the one it replaced
+  Runs initial_runs_, kept_runs_, previous_runs_;
+  std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
+  int window_count_ = 0;
+  double pooled_ss_ = 0;       // within-law squared deviations of every finished law
+  int pooled_df_ = 0;
+  OnlineController* pending_law_ = nullptr;  // the learner's next trial, waiting for the guard
+  int reverts_ = 0;
   int runs_ = 0;              // runs of the current law so far (runs_per_trial)
   double run_cost_sum_ = 0;   // their measured costs
 };

@@ -37,10 +37,12 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   final_i4 = h.terms.i4;
   // Learning trials only (alpha > 0): the warm-up hops, OC-FB and the re-runs of u^0 run the law
   // of alpha = 0, which (36) does not judge. The robustness map and results_table count the same.
-  if (learns && h.alpha > 0) (h.accepted ? accepted : rejected) += 1;
+  // Re-runs of the nominal's law (remeasured) are not trials.
+  if (learns && h.alpha > 0 && !h.remeasured) (h.accepted ? accepted : rejected) += 1;
   ++counted_;
   restarts += h.restarted ? 1 : 0;
   remeasured += h.remeasured ? 1 : 0;
+  reverted += h.reverted ? 1 : 0;
   if (converged_hop < 0 && h.status == LearnerStatus::kConverged) converged_hop = h.hop;
   if (stopped_hop < 0 && h.status == LearnerStatus::kLineSearchFailed) stopped_hop = h.hop;
   learner_status = learns ? LearnerStatusName(h.status) : "none";
@@ -77,7 +79,7 @@ RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(
   events_ = OpenOrThrow(dir_ + "/events.csv");
   std::fputs("hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,"
              "du2,dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-             "optimality,stance_mass\n", hops_);
+             "optimality,stance_mass,reverted\n", hops_);
   std::fputs("t,hop,phase,x,y,theta,phi,r,k_hip,k_leg,xd,yd,thetad,phid,rd,kd_hip,kd_leg,"
              "tau0,F0,k0_hip,k0_leg,push\n", trajectory_);
   std::fputs("t,hop,type,x,y,xd,yd\n", events_);
@@ -100,12 +102,12 @@ void RunLog::WriteHop(const plugin::HopReport& h) {
   errno = 0;
   const int n = std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
-               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f\n",
+               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f,%d\n",
                h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
                h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
                h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0,
                h.remeasured ? 1 : 0, h.learner_cost, h.nominal_cost, h.predicted, h.optimality,
-               h.stance_mass);
+               h.stance_mass, h.reverted ? 1 : 0);
   Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 
@@ -162,6 +164,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["accepted"] = s.accepted;
   j["restarts"] = s.restarts;
   j["remeasured"] = s.remeasured;
+  j["reverted"] = s.reverted;
   j["rejected"] = s.rejected;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;

@@ -69,7 +69,8 @@ struct Summary {
   /// same from hops.csv: accepted and alpha > 0).
   int accepted = 0, rejected = 0;
   int restarts = 0;  // hops after which the line search restarted (restart_on_failure)
-  int remeasured = 0;  // hops that re-ran the nominal's law (remeasure_nominal)
+  int remeasured = 0;  // hops that re-ran the nominal's law (remeasure_nominal, the harm guard)
+  int reverted = 0;    // laws the harm guard abandoned
   std::vector<Push> pushes;          // timed pushes, then the hop pushes resolved so far
   std::vector<HopPush> hop_pushes;   // the scenario's pushes by hop phase
   std::vector<std::optional<double>> hop_push_times;  // their start, once resolved

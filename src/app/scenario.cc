@@ -104,7 +104,8 @@ const std::vector<ElementSpec>& Elements() {
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
         Text("blend_feedback"), Text("start_correction"),
-        Number("restart_alpha", {0.0, 1.0, true, false})}},
+        Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
+        Number("verify_margin", kNonNegative)}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"gait", false,
@@ -296,6 +297,8 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
     l->start_correction = *v == "on";
   }
   l->restart_alpha = GetNumber(path, e, "restart_alpha");
+  l->verify_hops = GetInteger(path, e, "verify_hops");
+  l->verify_margin = GetNumber(path, e, "verify_margin");
 }
 
 // <push time=.../> or <push hop=... phase=.../>, with force and duration.

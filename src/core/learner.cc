@@ -422,6 +422,64 @@ void Learner::Initialize(const Trajectory& measured, const Trajectory* direction
   }
 }
 
+LearnerCheckpoint Learner::Save() const {
+  if (!initialized_) throw InvalidArgument("Learner::Save: call Initialize first");
+  LearnerCheckpoint c;
+  c.valid = true;
+  c.nominal = nominal_;
+  c.cost = nominal_cost_;
+  c.own_cost = nominal_own_cost_;
+  c.initial = accepted_ < 0;
+  if (!c.initial) c.law = controllers_[accepted_];
+  if (settings_.backward.use_previous_du) {
+    c.previous_nominal = previous_nominal_;
+    c.du_prev = du_prev_;
+  }
+  return c;
+}
+
+void Learner::Restore(const LearnerCheckpoint& c) {
+  if (!initialized_) throw InvalidArgument("Learner::Restore: call Initialize first");
+  if (!c.valid) throw InvalidArgument("Learner::Restore: the checkpoint is empty (use Save)");
+  nominal_ = c.nominal;
+  nominal_cost_ = c.cost;
+  nominal_own_cost_ = c.own_cost;
+  if (c.initial) {
+    accepted_ = -1;
+  } else {
+    accepted_ = 0;
+    active_ = 1;
+    controllers_[0] = c.law;
+  }
+  if (settings_.backward.use_previous_du) {
+    previous_nominal_ = c.previous_nominal;
+    du_prev_ = c.du_prev;
+  }
+  trial_pending_ = false;
+  remeasure_pending_ = false;
+  remeasure_trial_ = false;
+  nominal_samples_ = 0;
+  nominal_sample_sum_ = 0;
+  last_sample_ = c.cost;
+  failure_raises_ = 0;
+  curvature_scale_ = 1;
+  alpha_ = settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;  // as a restart
+  status_ = LearnerStatus::kRunning;
+  if (!RunPass()) {
+    throw InvalidArgument("Learner::Restore: the backward pass failed along the checkpoint's "
+                          "nominal for every regularization tried");
+  }
+}
+
+void Learner::SetNominalCost(double cost) {
+  if (!std::isfinite(cost)) {
+    throw InvalidArgument("Learner::SetNominalCost: cost = " + std::to_string(cost) +
+                          ", expected finite");
+  }
+  nominal_cost_ = cost;
+  last_sample_ = cost;
+}
+
 OnlineController& Learner::NominalLaw() {
   if (accepted_ >= 0) return controllers_[accepted_];
   controllers_[active_].Load(nominal_, pass_, 0.0, Vector::Zero(problem_->num_modes()));

@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/trial_driver.h"
 
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <string>
@@ -25,6 +26,15 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
     throw InvalidArgument("TrialDriverSettings: runs_per_trial = " +
                           std::to_string(settings.runs_per_trial) + ", expected >= 1");
   }
+  if (settings.guard.verify_trials < 0 || settings.guard.verify_trials == 1) {
+    throw InvalidArgument("TrialDriverSettings: guard.verify_trials = " +
+                          std::to_string(settings.guard.verify_trials) +
+                          ", expected 0 (off) or >= 2 (the spread is estimated from the re-runs)");
+  }
+  if (!(settings.guard.margin >= 0) || !std::isfinite(settings.guard.margin)) {
+    throw InvalidArgument("TrialDriverSettings: guard.margin = " +
+                          std::to_string(settings.guard.margin) + ", expected finite and >= 0");
+  }
   if (settings.method == Method::kMrl && prediction == nullptr) {
     throw InvalidArgument("TrialDriver: method kMrl needs a prediction plant (the model)");
   }
@@ -42,7 +52,181 @@ void TrialDriver::Reset() {
   frozen_ = false;
   runs_ = 0;
   run_cost_sum_ = 0;
+  verify_left_ = 0;
+  new_runs_ = initial_runs_ = kept_runs_ = previous_runs_ = other_runs_ = Runs{};
+  phase_ = Phase::kNone;
+  window_.assign(static_cast<size_t>(settings_.guard.verify_trials), 0.0);
+  window_count_ = 0;
+  new_learner_sum_ = 0;
+  initial_ = kept_ = previous_ = LearnerCheckpoint{};
+  pooled_ss_ = 0;
+  pooled_df_ = 0;
+  pending_law_ = nullptr;
+  reverts_ = 0;
   UseFallback();
+}
+
+void TrialDriver::Runs::Add(double x) {
+  // Welford: the mean and the squared deviations from it.
+  ++n;
+  const double delta = x - (n > 1 ? sum / (n - 1) : x);
+  sum += x;
+  ss += delta * (x - sum / n);
+}
+
+double TrialDriver::JudgedCost(const Trajectory& measured, bool learns) {
+  if (!reference_) return EvaluateCost(*problem_, measured).total;
+  reference_(measured, false);
+  const double cost = EvaluateCost(*problem_, measured).total;
+  reference_(measured, learns);  // back to the reference the learner works with
+  return cost;
+}
+
+bool TrialDriver::WorseThan(const Runs& a, const Runs& b) const {
+  if (a.n == 0 || b.n == 0) return false;
+  // The spread pooled over every finished law's runs and these two.
+  const double ss = pooled_ss_ + a.ss + b.ss;
+  const int df = pooled_df_ + a.n - 1 + b.n - 1;
+  const double spread = df > 0 && std::isfinite(ss) ? std::sqrt(ss / df) : 0.0;
+  const double se = spread * std::sqrt(1.0 / a.n + 1.0 / b.n);
+  return !(a.mean() <= b.mean() + settings_.guard.margin * se);
+}
+
+void TrialDriver::Pool(const Runs& runs) {
+  if (runs.n < 2 || !std::isfinite(runs.ss)) return;
+  pooled_ss_ += runs.ss;
+  pooled_df_ += runs.n - 1;
+}
+
+const LearnerCheckpoint& TrialDriver::Checkpoint(Target t) const {
+  return t == Target::kInitial ? initial_ : t == Target::kKept ? kept_ : previous_;
+}
+
+TrialDriver::Runs& TrialDriver::RunsOf(Target t) {
+  return t == Target::kInitial ? initial_runs_ : t == Target::kKept ? kept_runs_ : previous_runs_;
+}
+
+void TrialDriver::Challenge(Target against, bool watch) {
+  // The law `against` runs verify_trials times now, in the robot's present conditions, and the
+  // law on trial (new_runs_) is compared with those runs.
+  target_ = against;
+  watch_ = watch;
+  phase_ = Phase::kChallenge;
+  other_runs_ = Runs{};
+  verify_left_ = settings_.guard.verify_trials;
+  if (against == Target::kInitial) {
+    UseFallback();
+  } else {
+    UseLearnedLaw(against == Target::kKept ? kept_.law : previous_.law);
+  }
+}
+
+void TrialDriver::Watch(double judged) {
+  // The kept law's trials: a window of their last verify_trials judged costs. Worse than the
+  // law it replaced or u^0: that law runs again.
+  window_[static_cast<size_t>(window_count_ % settings_.guard.verify_trials)] = judged;
+  if (++window_count_ < settings_.guard.verify_trials) return;
+  Runs recent;
+  for (double c : window_) recent.Add(c);
+  const bool suspect =
+      (previous_.valid && WorseThan(recent, previous_runs_)) || WorseThan(recent, initial_runs_);
+  if (!suspect) return;
+  const bool to_initial = !previous_.valid || initial_runs_.mean() <= previous_runs_.mean();
+  new_runs_ = recent;
+  window_count_ = 0;
+  pending_law_ = learned_;
+  Challenge(to_initial ? Target::kInitial : Target::kPrevious, true);
+}
+
+TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
+  TrialOutcome out;
+  out.trial = trial_;
+  out.accepted = true;
+  out.remeasured = true;
+  out.ran_fallback = runs_fallback();
+  if (reference_) reference_(measured, true);
+  out.cost = EvaluateCost(*problem_, measured).total;
+  out.judged_cost = JudgedCost(measured, true);
+  out.nominal_cost = learner_->nominal_cost();
+  out.status = learner_->status();
+  const double judged = std::isfinite(out.judged_cost) ? out.judged_cost
+                                                       : std::numeric_limits<double>::infinity();
+  ++trial_;
+  if (phase_ == Phase::kVerify) {
+    new_runs_.Add(judged);
+    new_learner_sum_ += out.cost;
+  } else {
+    other_runs_.Add(judged);
+  }
+  if (--verify_left_ > 0) return out;
+  if (phase_ == Phase::kVerify) {
+    // The accepted law's re-runs are in. Worse than the law it replaced or u^0 as they measured
+    // before: that law runs again now (the robot's conditions may have changed since).
+    const Target replaced = kept_.valid ? Target::kKept : Target::kInitial;
+    const bool suspect = WorseThan(new_runs_, RunsOf(replaced)) ||
+                         WorseThan(new_runs_, initial_runs_);
+    if (!suspect) {
+      KeepNew();
+      return out;
+    }
+    const Target against = replaced == Target::kKept && kept_runs_.mean() < initial_runs_.mean()
+                                ? Target::kKept
+                                : Target::kInitial;
+    if (std::isfinite(new_runs_.mean())) {
+      Challenge(against, false);
+      return out;
+    }
+    target_ = against;  // not even finite: abandoned at once
+    watch_ = false;
+    other_runs_ = RunsOf(against);
+  }
+  // The other law's fresh runs are in: the law on trial is abandoned when it is worse.
+  phase_ = Phase::kNone;
+  const bool worse = WorseThan(new_runs_, other_runs_);
+  Pool(other_runs_);
+  RunsOf(target_) = other_runs_;
+  if (!worse) {
+    if (watch_) {
+      Pool(new_runs_);
+      kept_runs_ = new_runs_;  // the kept law as it measures now
+      UseLearnedLaw(*pending_law_);
+      pending_law_ = nullptr;
+    } else {
+      KeepNew();
+    }
+    return out;
+  }
+  Pool(new_runs_);
+  if (reference_) reference_(measured, true);
+  learner_->Restore(Checkpoint(target_));
+  if (target_ == Target::kInitial) {
+    kept_ = previous_ = LearnerCheckpoint{};
+  } else if (target_ == Target::kPrevious) {
+    kept_ = std::move(previous_);
+    kept_runs_ = previous_runs_;
+    previous_ = LearnerCheckpoint{};
+  }
+  ++reverts_;
+  out.reverted = true;
+  pending_law_ = nullptr;
+  window_count_ = 0;
+  UseLearnedLaw(learner_->NextTrial());
+  return out;
+}
+
+void TrialDriver::KeepNew() {
+  // Kept: its cost is the mean of the re-runs, free of the selection that accepted it; the law
+  // it replaced is remembered.
+  phase_ = Phase::kNone;
+  Pool(new_runs_);
+  learner_->SetNominalCost(new_learner_sum_ / new_runs_.n);
+  previous_ = std::move(kept_);
+  previous_runs_ = kept_runs_;
+  kept_ = learner_->Save();
+  kept_runs_ = new_runs_;
+  window_count_ = 0;
+  UseLearnedLaw(*pending_law_);
+  pending_law_ = nullptr;
 }
 
 void TrialDriver::UseFallback() {
@@ -60,10 +244,13 @@ bool TrialDriver::CompletionLearns() const {
 }
 
 TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
+  if (phase_ != Phase::kNone && !frozen_) return Verify(measured);
   TrialOutcome out;
   out.trial = trial_;
   out.ran_fallback = runs_fallback();
   const bool learns = CompletionLearns();
+  const bool guard = settings_.guard.verify_trials > 0 && learner_ != nullptr && !frozen_;
+  if (guard) out.judged_cost = JudgedCost(measured, learns);
   if (reference_) reference_(measured, learns);
   // runs_per_trial: the runs of a law the learner judges are averaged; all but the last only
   // report, and the law runs again.
@@ -87,6 +274,8 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.accepted = true;
     out.cost = EvaluateCost(*problem_, measured).total;
     if (learner_) out.status = learner_->status();
+    // A warm-up trial ran u^0: a sample of its cost for the guard.
+    if (guard && !learner_->initialized()) initial_runs_.Add(out.judged_cost);
   } else if (!learner_->initialized()) {
     // This trial ran u^0, T^0: Algorithm 1's "Initialize" (x^0, I^0, then (30)).
     if (settings_.method == Method::kMrl) {
@@ -103,6 +292,11 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.nominal_cost = learner_->nominal_cost();
     out.predicted = 0;
     out.optimality = learner_->optimality().total;
+    if (guard) {
+      initial_runs_.Add(out.judged_cost);
+      initial_ = learner_->Save();
+      Pool(initial_runs_);  // warm-up runs of u^0 count towards the spread
+    }
     UseLearnedLaw(learner_->NextTrial());
   } else {
     const TrialResult r = learner_->CompleteTrial(
@@ -123,7 +317,20 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     // (Learner::NextTrial).
     const bool replay =
         learner_->status() == LearnerStatus::kLineSearchFailed || learner_->remeasuring();
-    if (replay && learner_->iteration() == 0) UseFallback();
+    if (replay && learner_->nominal_is_initial()) UseFallback();
+    if (guard && r.accepted) {
+      // The harm guard: the accepted law runs again before it is kept; the learner's next
+      // trial waits.
+      pending_law_ = learned_;
+      phase_ = Phase::kVerify;
+      verify_left_ = settings_.guard.verify_trials;
+      new_runs_ = Runs{};
+      new_learner_sum_ = 0;
+      UseLearnedLaw(learner_->nominal_law());
+    } else if (guard && kept_.valid && !learner_->nominal_is_initial() && learned_) {
+      Watch(std::isfinite(out.judged_cost) ? out.judged_cost
+                                           : std::numeric_limits<double>::infinity());
+    }
   }
   if (!learns && !frozen_) UseFallback();
   ++trial_;

@@ -235,6 +235,26 @@ TEST_F(CliTest, VideoWithoutRenderWritesNoPngFiles) {
 // same run as the shipped file with those numbers), and a copy of a variant outside models/ runs
 // with absolute include paths (MuJoCo 2.2 joins them onto the model's directory: "cannot load
 // MJCF 'dir//abs/hopper_common.xml'"), or says how when its relative includes are missing.
+// Motor strength: hip_gain/leg_gain turn a <motor> into the <general> it stands for with gainprm
+// scaled. At 1 the run is the plain robot's, byte for byte (the conversion changes nothing);
+// a hip at 80 % changes the hops, and the controller (which checks the gear) still runs.
+TEST_F(CliTest, MotorStrengthVariantsScaleWhatTheMotorsDeliver) {
+  const std::string run = Scenario("default.xml") + " --hops 2 -q --method ocfb";
+  const Result plain = RunCli(run + " --out " + Out("plain"));
+  ASSERT_TRUE(plain.code == 0 || plain.code == 3) << plain.output;
+  const Result one = RunCli(run + " --out " + Out("one") + " --robot-variant hip_gain=1,leg_gain=1");
+  EXPECT_EQ(one.code, plain.code) << one.output;
+  EXPECT_EQ(ReadFile(dir_ / "one" / "hops.csv"), ReadFile(dir_ / "plain" / "hops.csv"));
+  const Result weak = RunCli(run + " --out " + Out("weak") + " --robot-variant hip_gain=0.8");
+  EXPECT_EQ(weak.code, 0) << weak.output;
+  EXPECT_NE(ReadFile(dir_ / "weak" / "hops.csv"), ReadFile(dir_ / "plain" / "hops.csv"));
+  EXPECT_NE(ReadFile(dir_ / "weak" / "summary.json").find("hopper_m8.xml with hip_gain=0.8"),
+            std::string::npos);
+  const Result bad = RunCli(run + " --out " + Out("bad") + " --robot-variant leg_gain=0");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("leg_gain=0, expected > 0"), std::string::npos) << bad.output;
+}
+
 TEST_F(CliTest, RobotVariantsWorkFromAnywhere) {
   const std::string run = Scenario("default.xml") + " --hops 2 -q";
   const Result shipped = RunCli(run + " --out " + Out("shipped") + " --robot " +
@@ -389,13 +409,17 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   EXPECT_EQ(hops[0],
             "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
             "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-            "optimality,stance_mass");
+            "optimality,stance_mass,reverted");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
-  // summary.json's mean_stance_mass is the mean of the hops' stance_mass (the last column), which
+  // summary.json's mean_stance_mass is the mean of the hops' stance_mass (the column before the
+  // last), which
   // weighs the 8 kg robot's torso and leg (8.001 kg), not the model's 10 kg.
   ASSERT_GT(hops.size(), 1u);
   double sum = 0;
-  for (size_t i = 1; i < hops.size(); ++i) sum += std::stod(hops[i].substr(hops[i].rfind(',') + 1));
+  for (size_t i = 1; i < hops.size(); ++i) {
+    const std::string row = hops[i].substr(0, hops[i].rfind(','));
+    sum += std::stod(row.substr(row.rfind(',') + 1));
+  }
   const double mean = sum / static_cast<double>(hops.size() - 1);
   EXPECT_NEAR(mean, 8.001, 1e-3);
   const std::string summary = ReadFile(dir_ / "run" / "summary.json");

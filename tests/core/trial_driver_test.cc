@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ddoc/cost.h"
+#include "ddoc/quadratic_cost.h"
 #include "test_util.h"
 #include "two_mode_lq.h"
 
@@ -417,6 +418,231 @@ TEST_F(TrialDriverTest, TerminationAfterAcceptedTrialsReplaysTheLastAcceptedLaw)
     EXPECT_NEAR(o.cost, driver.learner()->nominal_cost(), 1e-9 * driver.learner()->nominal_cost())
         << "replay " << i;
   }
+}
+
+
+// The harm guard's bad settings are named.
+TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
+  TrialDriverSettings one = DriverSettings(Method::kAlg1);
+  one.guard.verify_trials = 1;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, one, fallback); },
+                   "guard.verify_trials = 1, expected 0 (off) or >= 2");
+  TrialDriverSettings margin = DriverSettings(Method::kAlg1);
+  margin.guard.verify_trials = 2;
+  margin.guard.margin = -1;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, margin, fallback); },
+                   "guard.margin = -1.000000, expected finite and >= 0");
+}
+
+// A cost that is one of two quadratic costs: the learner's (judge = false) or the one the
+// harm guard judges by (judge = true), switched by the driver's cost reference.
+class TwoCosts : public SwitchedCost {
+ public:
+  TwoCosts(const SwitchedCost& learner, const SwitchedCost& judged)
+      : learner_(learner), judged_(judged) {}
+  bool judge = false;
+
+ protected:
+  const SwitchedCost& Active() const { return judge ? judged_ : learner_; }
+  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    return Active().Running(k, x, u);
+  }
+  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
+                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                            MatrixRef lux) const override {
+    Active().RunningDerivatives(k, x, u, lx, lu, lxx, luu, lux);
+  }
+  double DoSwitching(int k, const ConstVectorRef& x) const override {
+    return Active().Switching(k, x);
+  }
+  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                              MatrixRef phixx) const override {
+    Active().SwitchingDerivatives(k, x, phix, phixx);
+  }
+
+ private:
+  const SwitchedCost& learner_;
+  const SwitchedCost& judged_;
+};
+
+// The judged cost is the learner's with the input weighed 60x (r = 30): every law the learner
+// accepts uses input that u^0 = 0 does not, so it lowers the learner's cost and raises the
+// judged one. Without the guard the learner keeps such laws (checked first: the test's premise);
+// with it (3 re-runs, deterministic plant: zero spread) every accepted law is re-run, found
+// worse than u^0, u^0 is run again, and the law is abandoned; the learner goes on from u^0's
+// nominal, and no law it keeps judges worse than u^0.
+TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialLaw) {
+  QuadraticTrackingCost heavy_input(
+      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
+      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
+      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
+  TwoCosts costs(p.cost, heavy_input);
+  Problem problem = p.problem;
+  problem.cost = &costs;
+  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  auto judged = [&](const Trajectory& t) {
+    costs.judge = true;
+    const double c = EvaluateCost(problem, t).total;
+    costs.judge = false;
+    return c;
+  };
+  Trajectory measured;
+  plant.Run(lq.x0, fallback, &measured);
+  const double u0_judged = judged(measured);
+
+  TrialDriver unguarded(problem, DriverSettings(Method::kAlg1), fallback, nullptr, reference);
+  double kept_judged = u0_judged;  // the judged cost of the nominal the learner keeps
+  for (int i = 0; i < 30; ++i) {
+    const TrialOutcome o = unguarded.RunTrial(plant, lq.x0, &measured);
+    if (o.learned && o.accepted) kept_judged = judged(measured);
+  }
+  ASSERT_GT(unguarded.learner()->iteration(), 2);
+  ASSERT_GT(kept_judged, 1.01 * u0_judged) << "premise: the learner keeps harm unguarded";
+
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.guard.verify_trials = 3;
+  TrialDriver driver(problem, settings, fallback, nullptr, reference);
+  std::vector<TrialOutcome> o;
+  for (int i = 0; i < 30 || driver.verifying() > 0; ++i) {  // ends with no law on trial
+    o.push_back(driver.RunTrial(plant, lq.x0, &measured));
+    EXPECT_EQ(o.back().judged_cost, judged(measured)) << "trial " << i;
+  }
+  int accepted = 0;
+  for (size_t i = 1; i < o.size(); ++i) {
+    if (!o[i].learned || !o[i].accepted) continue;
+    ASSERT_LT(i + 6, o.size());
+    ++accepted;
+    // The accepted law runs 3 times more (the same law from the same start: the same cost);
+    // worse than u^0's Initialize trial, u^0 runs 3 times again, and the accepted law is
+    // abandoned after the last.
+    for (size_t j = i + 1; j <= i + 6; ++j) {
+      EXPECT_TRUE(o[j].remeasured) << "trial " << j;
+      EXPECT_FALSE(o[j].learned) << "trial " << j;
+      EXPECT_EQ(o[j].ran_fallback, j > i + 3) << "trial " << j;
+      EXPECT_EQ(o[j].judged_cost, j <= i + 3 ? o[i].judged_cost : u0_judged) << "trial " << j;
+      EXPECT_EQ(o[j].reverted, j == i + 6) << "trial " << j;
+    }
+    EXPECT_GT(o[i].judged_cost, u0_judged) << "trial " << i;
+  }
+  EXPECT_GE(accepted, 2);
+  EXPECT_EQ(driver.reverts(), accepted);
+  EXPECT_TRUE(driver.learner()->nominal_is_initial());
+  EXPECT_EQ(driver.learner()->nominal_cost(), o[0].cost);
+}
+
+// When the judged cost is the learner's, the guard keeps every law the learner accepts, and on
+// a deterministic plant the learner decides as without it, trial for trial: the re-runs are
+// inserted after each accepted trial and change nothing else.
+TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  TrialDriver unguarded(p.problem, settings, fallback);
+  settings.guard.verify_trials = 2;
+  TrialDriver guarded(p.problem, settings, fallback);
+  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
+  const std::vector<TrialOutcome> b = guarded.Run(plant, lq.x0, 40 + 2 * 12);
+  std::vector<const TrialOutcome*> judged;
+  for (const TrialOutcome& o : b) {
+    if (!o.remeasured) judged.push_back(&o);
+    EXPECT_FALSE(o.reverted) << "trial " << o.trial;
+  }
+  ASSERT_GE(judged.size(), 30u);
+  int accepted = 0;
+  for (size_t i = 0; i < judged.size() && i < a.size(); ++i) {
+    EXPECT_EQ(judged[i]->accepted, a[i].accepted) << "trial " << i;
+    EXPECT_EQ(judged[i]->cost, a[i].cost) << "trial " << i;
+    accepted += a[i].accepted && a[i].learned ? 1 : 0;
+  }
+  EXPECT_GE(accepted, 3);
+  EXPECT_EQ(guarded.reverts(), 0);
+}
+
+// A kept law that later measures worse: the plant's input gain flips after the learner kept a
+// law (a motor wired the other way round, an extreme of a weaker motor). u^0 = 0 uses no input
+// and does not notice; every law that uses input now costs more. The guard watches the kept
+// law's trials: once their last 3 judged costs are worse than u^0's, u^0 runs 3 times, and the
+// learner goes back to u^0's nominal.
+TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
+  TwoModeLq flipped_lq;
+  flipped_lq.b_scale = -1.0;
+  LqProblem flipped(flipped_lq);
+  ModelPlant flipped_plant(flipped.problem);
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.guard.verify_trials = 3;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  int i = 0;
+  for (; i < 60 && !(driver.learner()->iteration() >= 2 && driver.verifying() == 0 &&
+                     !driver.learner()->nominal_is_initial());
+       ++i) {
+    driver.RunTrial(plant, lq.x0, &measured);
+  }
+  ASSERT_FALSE(driver.learner()->nominal_is_initial()) << "premise: a law is kept";
+  ASSERT_EQ(driver.reverts(), 0);
+  flipped_plant.Run(lq.x0, fallback, &measured);
+  const double u0_flipped = EvaluateCost(p.problem, measured).total;
+  std::vector<TrialOutcome> o;
+  for (int j = 0; j < 20 && driver.reverts() == 0; ++j) {
+    o.push_back(driver.RunTrial(flipped_plant, lq.x0, &measured));
+  }
+  ASSERT_EQ(driver.reverts(), 1);
+  ASSERT_GE(o.size(), 6u);
+  // The revert follows 3 runs of u^0 (the challenge), which cost what u^0 costs.
+  for (size_t j = o.size() - 3; j < o.size(); ++j) {
+    EXPECT_TRUE(o[j].ran_fallback && o[j].remeasured) << "trial " << j;
+    EXPECT_EQ(o[j].judged_cost, u0_flipped) << "trial " << j;
+  }
+  EXPECT_TRUE(o.back().reverted);
+  EXPECT_TRUE(driver.learner()->nominal_is_initial());
+  // The 3 trials before it were the kept law's and measured worse than u^0.
+  for (size_t j = o.size() - 6; j < o.size() - 3; ++j) {
+    EXPECT_FALSE(o[j].remeasured) << "trial " << j;
+    EXPECT_GT(o[j].judged_cost, u0_flipped) << "trial " << j;
+  }
+}
+
+// Save and Restore: a learner that went on from a checkpoint has the checkpoint's nominal, cost
+// and law, restarts its line search, and keeps counting trials and iterations.
+TEST_F(TrialDriverTest, ALearnerRestoredFromACheckpointGoesOnFromItsNominal) {
+  LearnerSettings settings = LqTestSettings();
+  settings.restart_alpha = 0.25;
+  Learner learner(p.problem, settings);
+  Trajectory measured;
+  plant.Run(lq.x0, fallback, &measured);
+  learner.Initialize(measured);
+  int trials = 0;
+  while (learner.iteration() < 2 && trials++ < 50) {
+    plant.Run(lq.x0, learner.NextTrial(), &measured);
+    learner.CompleteTrial(measured);
+  }
+  ASSERT_EQ(learner.iteration(), 2);
+  const LearnerCheckpoint checkpoint = learner.Save();
+  const Trajectory nominal = learner.nominal();
+  const double cost = learner.nominal_cost();
+  const Matrix p0 = learner.backward_pass().P(0, 0);
+  while (learner.iteration() < 4 && trials++ < 100) {
+    plant.Run(lq.x0, learner.NextTrial(), &measured);
+    learner.CompleteTrial(measured);
+  }
+  ASSERT_EQ(learner.iteration(), 4);
+  const int trials_before = learner.trials();
+  learner.NextTrial();  // a pending trial is dropped by Restore
+  learner.Restore(checkpoint);
+  EXPECT_EQ(learner.nominal().modes[0].x, nominal.modes[0].x);
+  EXPECT_EQ(learner.nominal().T, nominal.T);
+  EXPECT_EQ(learner.nominal_cost(), cost);
+  EXPECT_FALSE(learner.nominal_is_initial());
+  EXPECT_TRUE((learner.backward_pass().P(0, 0) - p0).cwiseAbs().maxCoeff() <=
+              1e-9 * p0.cwiseAbs().maxCoeff());
+  EXPECT_EQ(learner.alpha(), 0.25);
+  EXPECT_EQ(learner.status(), LearnerStatus::kRunning);
+  EXPECT_EQ(learner.iteration(), 4);
+  // The law that produced the checkpoint's nominal reproduces it.
+  plant.Run(lq.x0, learner.nominal_law(), &measured);
+  EXPECT_NEAR(EvaluateCost(p.problem, measured).total, cost, 1e-9 * cost);
+  plant.Run(lq.x0, learner.NextTrial(), &measured);
+  learner.CompleteTrial(measured);
+  EXPECT_EQ(learner.trials(), trials_before + 1);
+  ExpectThrowsWith([&] { learner.Restore(LearnerCheckpoint{}); }, "the checkpoint is empty");
 }
 
 }  // namespace

@@ -29,7 +29,7 @@ FORMATS = [("hop", "%d"), ("t_start", "%.6f"), ("t_end", "%.6f"), ("cost", "%.9g
            ("alpha", "%.6g"), ("accepted", "%d"), ("du2", "%.9g"), ("dT2", "%.9g"),
            ("start_shift", "%.9g"), ("restarted", "%d"), ("remeasured", "%d"),
            ("learner_cost", "%.9g"), ("nominal_cost", "%.9g"), ("predicted", "%.9g"),
-           ("optimality", "%.9g"), ("stance_mass", "%.6f")]
+           ("optimality", "%.9g"), ("stance_mass", "%.6f"), ("reverted", "%d")]
 
 
 # trajectory.csv's columns and formats (RunLog::WriteSample): t, hop, phase, 14 coordinates and
