@@ -105,6 +105,11 @@ TEST(ZeroDuration, AStandardProblemIsPosedWithDurationMinZero) {
   p.bounds.duration_min(3) = -0.01;
   ExpectError([&] { p.Validate(); }, "duration_min(3) = -0.01, expected >= 0");
   ExpectError([&] { ModelPlant bad(*sp->system, p.bounds); }, "duration_min(3) = -0.01");
+  // A policy may plan a mode of zero duration, not a negative one.
+  auto none = [](int, double, const ConstVectorRef&, VectorRef) {};
+  EXPECT_NO_THROW(FunctionPolicy(Eigen::Vector2d(0.0, 1.0), none));
+  ExpectError([&] { FunctionPolicy(Eigen::Vector2d(-0.5, 1.5), none); },
+              "planned duration of mode 0 is -0.500000, expected >= 0");
 }
 
 // The gradient of the cost w.r.t. T_1 where mode 1 has zero duration, against one-sided finite
