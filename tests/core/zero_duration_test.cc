@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <random>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -154,6 +155,38 @@ TEST(ZeroDuration, TheGradientAtAZeroDurationIsTheOneSidedDerivative) {
     const double fd = (-3 * J0 + 4 * cost_at(h, &scratch) - cost_at(2 * h, &scratch)) / (2 * h);
     EXPECT_NEAR(gradient, fd, 1e-3 * std::abs(fd))
         << (equation == BackwardEquation::kRiccati ? "kRiccati" : "kLyapunov");
+  }
+}
+
+// (31) with the lower bound 0 active ends the mode exactly where it starts: T + S dD in floating
+// point would leave modes of 1e-17 s, whose 1 / D-scaled terms the next backward pass would see.
+TEST(ZeroDuration, TheSwitchingTimeUpdatePutsAVanishingModeOnExactlyZero) {
+  std::unique_ptr<StandardProblem> sp = StandardProblemFromLq(Exp0WithAPricedCopy(1.0));
+  sp->problem.bounds.duration_min.setZero();
+  ModelPlant plant(sp->problem);
+  BackwardPass pass;
+  pass.Allocate(sp->problem, 10000);
+  OnlineController law;
+  law.Allocate(sp->problem, 10000);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial) {
+    const double t0 = 0.1 + 0.8 * unit(rng), t1 = t0 + 0.05 + 0.5 * unit(rng);
+    const Eigen::Vector3d T(t0, t1, 2.0);
+    // A steep price on D_1 (its gradient 1e3) and a generic pull on T_0.
+    const Eigen::Vector3d p2(unit(rng) - 0.5 - 1e3, 1e3, 0.0);
+    const SwitchingTimeStep step =
+        SolveSwitchingTimeUpdate(sp->problem, T, Matrix::Identity(3, 3), p2, 1.0);
+    ASSERT_NEAR(step.T_planned(1) - step.T_planned(0), 0.0, 1e-12) << "trial " << trial;
+    EXPECT_EQ(step.T_planned(1), step.T_planned(0)) << "trial " << trial;
+    // The controller plans T + dT (rounded again): a vanished mode plans exactly 0.
+    FunctionPolicy nominal_law(Eigen::Vector3d(t0, t1 - t0, 2.0 - t1),
+                               [](int, double, const ConstVectorRef&, VectorRef u) { u(0) = 0.3; });
+    Trajectory nominal;
+    plant.Run(sp->x0, nominal_law, &nominal);
+    ASSERT_TRUE(pass.Run(nominal));
+    law.Load(nominal, pass, 1.0, step.dT);
+    EXPECT_EQ(law.PlannedDuration(1), 0.0) << "trial " << trial;
   }
 }
 
