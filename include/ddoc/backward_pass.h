@@ -192,6 +192,8 @@ class BackwardPass {
     Vector f;      // n: f_k
     Matrix fx;     // n x n: D f_x
     Matrix fu;     // n x m: D f_u
+    Matrix fx_unit;  // n x n: f_x, kept only for a mode of zero duration (D = 0)
+    Matrix fu_unit;  // n x m: f_u, likewise
     double l = 0;  // l_k
     Vector lx;     // n: l_x (unscaled)
     Vector lu;     // m: l_u (unscaled)
@@ -207,6 +209,8 @@ class BackwardPass {
   // Stage state and derivative.
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev);
   bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
+  // FreeSet of a mode of zero duration (kRiccati): no free input, the Hamiltonian's minimizer.
+  bool VanishedStep(int n, const ConstVectorRef& p);
   double RiccatiStiffness(int n, const ConstMatrixRef& P);
   double RiccatiStiffnessBound(int n, const ConstMatrixRef& P) const;
   void Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,

@@ -64,7 +64,8 @@ class FunctionPolicy : public Policy {
   Function fn_;
 };
 
-/// tau = k + clamp(t / D, 0, 1) (D > 0), the time mapping shared by all ddoc policies.
+/// tau = k + clamp(t / D, 0, 1) (D > 0; tau = k for D = 0), the time mapping shared by all ddoc
+/// policies.
 double NormalizedTime(int k, double t_since_mode_start, double planned_duration);
 
 }  // namespace ddoc

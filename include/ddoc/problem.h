@@ -23,7 +23,8 @@ namespace ddoc {
 struct Bounds {
   Vector u_min;         ///< m, entries in [-inf, inf), default none (set them)
   Vector u_max;         ///< m, entries in (-inf, inf], >= u_min
-  Vector duration_min;  ///< K, each > 0
+  /// K, s, each >= 0 (no default: set it); 0 lets mode k vanish (a legal zero-duration mode).
+  Vector duration_min;
   /// K, each >= duration_min, finite; with a finite final_time_max entries may be +inf or the
   /// vector empty (default): the duration is then bounded by the final time (MaxDuration).
   Vector duration_max;
@@ -58,7 +59,7 @@ struct Problem {
   /// Throws InvalidArgument naming the first problem found: null system/cost, K == 0,
   /// size mismatches (u bounds vs m, duration bounds and weights vs K), reversed bounds
   /// (min > max), NaN bounds, u_min = +inf or u_max = -inf, non-finite duration bounds or
-  /// weights, duration_min <= 0, negative weights, a positive weight on a mode without surface
+  /// weights, duration_min < 0, negative weights, a positive weight on a mode without surface
   /// (s_k == 0), a final-time box that is reversed, negative or NaN, or one that the duration
   /// bounds cannot meet (sum of duration_min > final_time_max or sum of duration_max <
   /// final_time_min), a cost defined for another number of modes than the system

@@ -12,6 +12,9 @@ namespace ddoc {
 
 /// Samples of one mode k on [T_{k-1}, T_k].
 ///
+/// A mode of zero duration (T_k = T_{k-1}, allowed when Bounds::duration_min(k) = 0) has its
+/// samples at that one instant (a model plant records two: the entry state and, unchanged, the
+/// pre-switch state); Tau spreads them evenly over [k, k+1].
 /// Sample 0 is at t = T_{k-1} and holds the post-reset state x^+(T_{k-1}) (x0 for k = 0);
 /// the last sample is at t = T_k and holds the PRE-switch state x^-(T_k). Times are absolute
 /// from the start of the trial (t = 0) and non-decreasing, at least 2 samples per mode.
@@ -36,13 +39,14 @@ struct Trajectory {
   int total_samples() const;
   /// Start time of mode k: 0 for k = 0, else T(k-1).
   double ModeStart(int k) const { return k == 0 ? 0.0 : T(k - 1); }
-  /// Normalized time (12) of sample j of mode k: tau = k + (t - T_{k-1}) / (T_k - T_{k-1}).
+  /// Normalized time (12) of sample j of mode k: tau = k + (t - T_{k-1}) / (T_k - T_{k-1});
+  /// k + j / (N_k - 1) for a mode of zero duration.
   double Tau(int k, int j) const;
 
   /// Structural checks; throws InvalidArgument naming the offending mode/sample/quantity:
   /// K == 0, fewer than 2 samples, size mismatches between t/x/u, non-finite or decreasing
   /// times, first sample of mode 0 not at t = 0, mode k not starting at T(k-1), last sample not
-  /// at T(k), zero-length modes, non-finite states or inputs, x0 != first state.
+  /// at T(k), negative durations (zero is legal), non-finite states or inputs, x0 != first state.
   void Validate() const;
   /// Validate() plus dimensions against a system: K, n_k, m.
   void Validate(const SwitchedSystem& system) const;

@@ -15,6 +15,8 @@ void BackwardPass::Interval::Allocate(int n, int m) {
   f.setZero(n);
   fx.setZero(n, n + 1);
   fu.setZero(n, m);
+  fx_unit.setZero(n, n);
+  fu_unit.setZero(n, m);
   lx.setZero(n);
   lu.setZero(m);
   lxx.setZero(n, n);
@@ -211,6 +213,10 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   auto fu = c_.fu.topRows(n);
   sys.Flow(k, xm, u, f);
   sys.FlowDerivatives(k, xm, u, fx, fu);
+  if (D == 0) {  // a vanished mode: D f_x = 0 loses the per-unit-time derivatives it needs
+    c_.fx_unit.topLeftCorner(n, n) = fx;
+    c_.fu_unit.topRows(n) = fu;
+  }
   fx *= D;
   fu *= D;
   c_.fx.col(n).head(n) = f;  // [D f_x, f]: one product gives P(:, 0:n) D f_x and P(:, 0:n) f
@@ -220,8 +226,10 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   auto lux = c_.lux.leftCols(n);
   cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);  // lxx: D is applied in Symmetrize
   lux *= D;
-  c_.H *= D;
-  if (m_ > 0) luu_scale_ = std::max(luu_scale_, c_.H.diagonal().cwiseAbs().maxCoeff());
+  if (D > 0) {
+    c_.H *= D;
+    if (m_ > 0) luu_scale_ = std::max(luu_scale_, c_.H.diagonal().cwiseAbs().maxCoeff());
+  }  // else a vanished mode: H = l_uu + mu I per unit time, for its Hamiltonian step (FreeSet)
   c_.H.diagonal().array() += mu_;
   if (m_ > 0) {
     c_.lo = problem_->bounds.u_min - u;
@@ -243,6 +251,7 @@ bool BackwardPass::FreeSet(int n, const ConstMatrixRef& /*P*/, const ConstVector
   // which inputs are free (box-constrained DDP: clamped inputs get no feedback).
   const int m = m_;
   if (m == 0) return true;
+  if (c_.D == 0 && settings_.equation == BackwardEquation::kRiccati) return VanishedStep(n, p);
   gu_.noalias() = c_.D * c_.lu;
   gu_.noalias() += c_.fu.topRows(n).transpose() * p.head(n);
   if (settings_.equation != BackwardEquation::kRiccati) {
@@ -289,6 +298,21 @@ bool BackwardPass::FreeSet(int n, const ConstMatrixRef& /*P*/, const ConstVector
   return true;
 }
 
+bool BackwardPass::VanishedStep(int n, const ConstVectorRef& p) {
+  // A mode of zero duration: its inputs do not act on the cost (F_u = L_u = 0), so they get no
+  // feedback (no free input, no Riccati term) and the step is the pointwise minimizer of the
+  // mode's Hamiltonian l + p_x^T f over the box, k = argmin 1/2 k^T (l_uu + mu) k + k^T (l_u +
+  // f_u^T p_x): free of cost now, it makes the next pass's gradient w.r.t. D_k the one-sided
+  // derivative min_u H_k (docs/engine.md, "Modes of zero duration").
+  c_.Hinv.setZero();
+  gu_ = c_.lu;
+  gu_.noalias() += c_.fu_unit.topRows(n).transpose() * p.head(n);
+  k_.setZero();
+  if (qp_.Solve(c_.H, gu_, c_.lo, c_.hi, k_) == BoxQPStatus::kNotPositiveDefinite) return false;
+  c_.kc = k_;  // all inputs "clamped" at the step: Derivative's k = kc
+  return true;
+}
+
 void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
                               const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                               bool store_mid, int s) {
@@ -323,7 +347,10 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
   // + (l_x + time curvature p_x^T f_x) c^T in the (x, T) column(s) (the symmetric sum adds
   // its transpose; D l_xx is added there too).
   auto hx = hx_curv_.head(n);
-  if (settings_.time_curvature) {
+  if (settings_.time_curvature && D == 0) {  // a vanished mode: f_x, f_u per unit time
+    TransposeTimes(c_.fx_unit.topLeftCorner(n, n), px, hx);
+    TransposeTimes(c_.fu_unit.topRows(n), px, hu_curv_);
+  } else if (settings_.time_curvature) {
     TransposeTimes(fx, px, hx);
     hx *= 1.0 / D;
     TransposeTimes(fu, px, hu_curv_);
@@ -405,7 +432,7 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     if (m > 0) TransposeTimes(fu, separate_lambda ? lam.head(n) : px, grad);
     grad += D * c_.lu;
     if (riccati) {
-      if (box_ && settings_.box_aware && m > 0) {
+      if (box_ && settings_.box_aware && m > 0 && D > 0) {
         // The stored step is the box QP's at this (midpoint) gradient: the free set was fixed at
         // the interval's right end, and the free inputs' Newton step at the midpoint can leave
         // the box; the plant's QP (33) would clamp it, and the prediction would count what the
@@ -573,7 +600,7 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
   ps = p + (0.5 * h) * e0;
   if (separate_lambda) lams = lam + (0.5 * h) * l0;
   Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d1, e1, l1, store, s);
-  if (riccati && store) {
+  if (riccati && store && D > 0) {  // a vanished mode's step changes no cost
     predicted_linear_ += interval * k_.dot(gu_);
     tmpm_.noalias() = c_.H * k_;
     predicted_quadratic_ += interval * k_.dot(tmpm_);

@@ -80,6 +80,7 @@ Optimality ComputeOptimality(const Problem& problem, const Trajectory& nominal,
   for (int k = 0; k < K; ++k) {
     const ModeTrajectory& mode = nominal.modes[k];
     const double D = nominal.T(k) - nominal.ModeStart(k);
+    if (D == 0) continue;  // a vanished mode: its inputs do not act on the cost
     for (int j = 0; j + 1 < mode.num_samples(); ++j) {
       const double h = pass.tau(k, j + 1) - pass.tau(k, j);
       const auto g = pass.Gradient(k, j);

@@ -20,11 +20,15 @@ ModelPlant::ModelPlant(const SwitchedSystem& system, const Bounds& bounds,
                           std::to_string(K));
   }
   for (int k = 0; k < K; ++k) {
-    if (!(bounds.duration_min(k) > 0) || !(bounds.duration_min(k) <= bounds.MaxDuration(k)) ||
+    // duration_min = 0 is legal: the mode may vanish (two samples at the same instant).
+    if (!(bounds.duration_min(k) >= 0) || !(bounds.duration_min(k) <= bounds.MaxDuration(k)) ||
         !std::isfinite(bounds.MaxDuration(k))) {
-      throw InvalidArgument("ModelPlant: duration bounds of mode " + std::to_string(k) +
-                            " must satisfy 0 < min <= max < inf (max: duration_max, or "
-                            "final_time_max when smaller)");
+      std::ostringstream os;
+      os << "ModelPlant: duration bounds of mode " << k << " (duration_min(" << k
+         << ") = " << bounds.duration_min(k) << ", upper bound " << bounds.MaxDuration(k)
+         << ") must satisfy 0 <= min <= max < inf (max: duration_max, or final_time_max when "
+            "smaller)";
+      throw InvalidArgument(os.str());
     }
   }
   if (!(settings.dt > 0) || !std::isfinite(settings.dt)) {

@@ -144,7 +144,10 @@ void OnlineController::CheckPlannedDurations(const ConstVectorRef& nominal_T,
   double previous = 0.0;
   for (int k = 0; k < K_; ++k) {
     const double planned = nominal_T(k) + dT(k);
-    if (!(planned - previous > 0)) {
+    // A vanished mode (duration_min = 0) may plan zero, up to the rounding of T + dT.
+    const bool may_vanish = problem_->bounds.duration_min(k) == 0 &&
+                            planned - previous >= -1e-12 * (1.0 + std::abs(planned));
+    if (!(planned - previous > 0) && !may_vanish) {
       throw InvalidArgument(std::string(who) + ": planned duration of mode " + std::to_string(k) +
                             " is " + std::to_string(planned - previous) + ", expected > 0");
     }
@@ -156,6 +159,10 @@ void OnlineController::PlanDurations() {
   planned_T_ = nominal_T_ + dT_;
   for (int k = 0; k < K_; ++k) {
     planned_durations_(k) = planned_T_(k) - (k == 0 ? 0.0 : planned_T_(k - 1));
+    // A vanished mode (duration_min = 0): T + dT within rounding of T_{k-1} plans exactly 0.
+    const bool vanished = problem_->bounds.duration_min(k) == 0 &&
+                          planned_durations_(k) <= 1e-12 * (1.0 + std::abs(planned_T_(k)));
+    if (planned_durations_(k) < 0 || vanished) planned_durations_(k) = 0;
   }
 }
 
@@ -266,7 +273,7 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
       // The nominal passed sample s at t = (tau - k) D_k^i (its own durations); `law` acted
       // there at k + t / D_k(law), its planned duration. That gain belongs to x^i(tau).
       const double t = (tau_(s) - k) * nominal_duration;
-      const double tau = k + std::min(std::max(t / law.planned_durations_(k), 0.0), 1.0);
+      const double tau = NormalizedTime(k, t, law.planned_durations_(k));  // D = 0: tau = k
       const double a = law.Interval(k, tau, &j);
       const int s0 = law.layout_.index(k, j), s1 = s0 + 1;
       law.InterpolateHessian(s0, s1, a, &H_);

@@ -29,9 +29,10 @@ OpenLoopPolicy::OpenLoopPolicy(const Trajectory& trajectory, const ConstVectorRe
   cursor_.assign(K, 0);
   for (int k = 0; k < K; ++k) {
     durations_(k) = T_planned(k) - (k == 0 ? 0.0 : T_planned(k - 1));
-    if (!(durations_(k) > 0) || !std::isfinite(durations_(k))) {
+    // 0 is a vanished mode (Bounds::duration_min = 0): its inputs are those at tau = k.
+    if (!(durations_(k) >= 0) || !std::isfinite(durations_(k))) {
       throw InvalidArgument("OpenLoopPolicy: planned duration of mode " + std::to_string(k) +
-                            " is " + std::to_string(durations_(k)) + ", expected > 0");
+                            " is " + std::to_string(durations_(k)) + ", expected >= 0");
     }
     tau_[k].resize(nominal_.modes[k].num_samples());
     for (int j = 0; j < nominal_.modes[k].num_samples(); ++j) tau_[k](j) = nominal_.Tau(k, j);
@@ -63,9 +64,9 @@ void OpenLoopPolicy::Step(int k, double t_since_mode_start, const ConstVectorRef
 FunctionPolicy::FunctionPolicy(const ConstVectorRef& planned_durations, Function fn)
     : durations_(planned_durations), fn_(std::move(fn)) {
   for (int k = 0; k < durations_.size(); ++k) {
-    if (!(durations_(k) > 0) || !std::isfinite(durations_(k))) {
+    if (!(durations_(k) >= 0) || !std::isfinite(durations_(k))) {  // 0: a vanished mode
       throw InvalidArgument("FunctionPolicy: planned duration of mode " + std::to_string(k) +
-                            " is " + std::to_string(durations_(k)) + ", expected > 0");
+                            " is " + std::to_string(durations_(k)) + ", expected >= 0");
     }
   }
   if (!fn_) throw InvalidArgument("FunctionPolicy: empty function");

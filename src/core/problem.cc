@@ -84,9 +84,10 @@ void Problem::Validate() const {
     }
   }
   for (int k = 0; k < K; ++k) {
-    if (bounds.duration_min(k) <= 0) {
+    if (bounds.duration_min(k) < 0) {
       std::ostringstream os;
-      os << "duration_min(" << k << ") = " << bounds.duration_min(k) << ", expected > 0";
+      os << "duration_min(" << k << ") = " << bounds.duration_min(k)
+         << ", expected >= 0 (0: mode " << k << " may vanish)";
       Fail(os.str());
     }
     if (bounds.duration_min(k) > bounds.MaxDuration(k)) {

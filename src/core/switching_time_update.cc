@@ -181,6 +181,17 @@ SwitchingTimeStep SolveSwitchingTimeUpdate(const Problem& problem, const ConstVe
   out.status = SolveDurationQp(H, alpha * gD, lo, hi, sum_lo, sum_hi, &dD);
   out.dT = S * dD;
   out.T_planned = T_nominal + out.dT;
+  // A mode that may vanish (duration_min = 0) and that the step puts on that bound ends exactly
+  // where it starts: T + S dD would leave a 1e-17 s mode, whose terms scaled by 1 / D_k the
+  // next backward pass would see.
+  for (int k = 0; k < K; ++k) {
+    if (problem.bounds.duration_min(k) != 0 ||
+        D(k) + dD(k) > 1e-12 * std::max(1.0, std::abs(T_nominal(k)))) {
+      continue;
+    }
+    out.T_planned(k) = k == 0 ? 0.0 : out.T_planned(k - 1);
+    out.dT(k) = out.T_planned(k) - T_nominal(k);
+  }
   out.model_change = 0.5 * dD.dot(H * dD) + gD.dot(dD);
   return out;
 }

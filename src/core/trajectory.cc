@@ -26,7 +26,11 @@ int Trajectory::total_samples() const {
 
 double Trajectory::Tau(int k, int j) const {
   const double start = ModeStart(k);
-  return k + (modes[k].t(j) - start) / (T(k) - start);
+  const double duration = T(k) - start;
+  // A mode of zero duration (duration_min = 0): its samples share one instant and are spread
+  // evenly over [k, k+1] in tau.
+  if (duration == 0) return k + static_cast<double>(j) / (modes[k].num_samples() - 1);
+  return k + (modes[k].t(j) - start) / duration;
 }
 
 void Trajectory::Validate() const {
@@ -93,9 +97,9 @@ void Trajectory::Validate() const {
          << ") = " << T(k);
       Fail(os.str());
     }
-    if (!(T(k) > start)) {
+    if (!(T(k) >= start)) {  // zero is legal: a vanished mode (Bounds::duration_min = 0)
       std::ostringstream os;
-      os << where_str() << "zero or negative duration T(k) - T(k-1) = " << T(k) - start;
+      os << where_str() << "negative duration T(k) - T(k-1) = " << T(k) - start;
       Fail(os.str());
     }
   }

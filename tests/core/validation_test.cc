@@ -138,7 +138,7 @@ TEST(Validation, ProblemNamesEachProblem) {
   with([](Problem& p) { p.surface_weights = Vector::Zero(1); }, "surface_weights has size 1");
   with([](Problem& p) { p.bounds.u_min(0) = 2; }, "reversed input bounds: u_min(0) = 2 > u_max(0)");
   with([](Problem& p) { p.bounds.duration_min(1) = 2; }, "reversed duration bounds: duration_min(1)");
-  with([](Problem& p) { p.bounds.duration_min(0) = 0; }, "duration_min(0) = 0, expected > 0");
+  with([](Problem& p) { p.bounds.duration_min(0) = -0.5; }, "duration_min(0) = -0.5, expected >= 0");
   with([](Problem& p) { p.bounds.u_max(0) = kNaN; }, "bounds.u_max(0) = nan is NaN");
   with([](Problem& p) { p.bounds.u_min(0) = kInf; }, "empty input box: u_min(0) = inf");
   with([](Problem& p) { p.bounds.u_max(0) = -kInf; }, "empty input box: u_min(0) = -1, u_max(0) = -inf");
@@ -180,13 +180,19 @@ TEST(Validation, TrajectoryNamesEachProblem) {
   with([](Trajectory& t) { t.x0 = Vector::Ones(2); }, "x0 differs");
   with([](Trajectory& t) { t.x0 = Vector::Ones(3); }, "x0 has size 3");
   with([](Trajectory& t) { t.modes[1].x = Matrix::Zero(2, 4); }, "mode 1: x has 2 rows, expected n_1 = 3");
-  // Zero-length mode.
+  // A negative duration (a zero one is a vanished mode, legal with duration_min = 0).
   with(
       [](Trajectory& t) {
-        t.modes[1].t.setConstant(0.5);
-        t.T(1) = 0.5;
+        t.modes[1].t.setConstant(0.4);
+        t.T(1) = 0.4;
       },
-      "zero or negative duration");
+      "first sample at t = 0.4, expected the mode start 0.5");
+  Trajectory vanished = b.Valid();
+  vanished.modes[1].t.setConstant(0.5);
+  vanished.T(1) = 0.5;
+  vanished.Validate();
+  EXPECT_EQ(vanished.Tau(1, 0), 1.0);
+  EXPECT_EQ(vanished.Tau(1, vanished.modes[1].num_samples() - 1), 2.0);
 }
 
 TEST(Validation, EngineObjectsRejectBadSettingsAndInputs) {
