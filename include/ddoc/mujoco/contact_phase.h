@@ -18,8 +18,7 @@ struct ContactPhaseSettings {
   double takeoff_force = 0.5;
   /// No phase change within this time after the previous one (or after Reset), s.
   double min_phase_time = 0.03;
-  /// Locate each event inside the physics step (ContactPhaseDetector::event_time()); default
-  /// false: at the step (docs/experiments.md, "Sub-step event timing").
+  /// Events located inside the physics step (event_time(), class comment); default false.
   bool substep_events = false;
 };
 
