@@ -283,19 +283,28 @@ void HopperController::Step(const mjData* d) {
   const bool was_stance = started_ && mode() == hopper::kStance;
   const ContactChange change = detector_.Update(map_, d);
   const bool flight = mode() == hopper::kFlight;
-  if (flight || change == ContactChange::kTouchdown) {
+  const bool substep = config_.contact.substep_events;  // also keeps the flight state in stance
+  if (flight || change == ContactChange::kTouchdown || substep) {
     MapFlightState(map_, d, vsa_.state(), xf_.data());
   }
   if (!flight) MapStanceState(map_, d, vsa_.state(), xs_.data());
   if (was_stance) AddStanceImpulse(d, step);
   if (!started_) {
     started_ = true;
-    BeginHop(t);
+    BeginHop(t, xf_);
   }
-  if (change == ContactChange::kTouchdown) Touchdown(t);
-  if (change == ContactChange::kTakeoff) {
-    EndHop(t);
-    BeginHop(t);
+  if (change == ContactChange::kTouchdown && substep && t > hist_t_[0]) {
+    // x^-(T1) between the last flight step and this one, at the detector's instant.
+    const double w = std::max(1e-3, (detector_.event_time() - hist_t_[0]) / (t - hist_t_[0]));
+    Touchdown(hist_t_[0] + w * (t - hist_t_[0]), hist_xf_[0] + w * (xf_ - hist_xf_[0]));
+  } else if (change == ContactChange::kTouchdown) {
+    Touchdown(t, xf_);
+  }
+  if (change == ContactChange::kTakeoff && substep) {
+    TakeoffInsideStep(t);
+  } else if (change == ContactChange::kTakeoff) {
+    EndHop(t, xf_);
+    BeginHop(t, xf_);
   }
   if (job_.load(std::memory_order_acquire) == Job::kDone) TakeOfflineResult();
   DeployLawWhenDue(t);
@@ -313,7 +322,47 @@ void HopperController::Step(const mjData* d) {
   Sanitize();
   effort_ += report_cost_.InputCost(u_) * std::max(step, map_.timestep);
   Record(t);
-  if (!flight) last_stance_ = xs_;
+  if (!flight) {
+    if (substep) prev_stance_ = last_stance_;
+    last_stance_ = xs_;
+  }
+  if (substep) {
+    hist_t_[1] = hist_t_[0];
+    hist_t_[0] = t;
+    hist_xf_[1] = hist_xf_[0];
+    hist_xf_[0] = xf_;
+    hist_u_[1] = hist_u_[0];
+    hist_u_[0] = u_;
+  }
+}
+
+void HopperController::TakeoffInsideStep(double t) {
+  const double t0 = hist_t_[1], t1 = hist_t_[0];  // the last two steps, both in stance
+  if (!(t1 > t0)) {
+    EndHop(t, xf_);
+    BeginHop(t, xf_);
+    return;
+  }
+  // The detector puts the takeoff in [t0, t1]: x^-(T2) and the next hop's start are the states
+  // there, interpolated; the stance sample of t1 (still pending, see Record) is not recorded.
+  const double tau = std::min(t1, std::max(t0 + 1e-3 * (t1 - t0), detector_.event_time()));
+  const double w = (tau - t0) / (t1 - t0);
+  last_stance_ = prev_stance_ + w * (last_stance_ - prev_stance_);
+  last_sample_t_ = tau - hop_start_;
+  recorders_[recording_].AddSample(last_sample_t_, last_stance_, hist_u_[1]);
+  stance_pending_ = false;
+  // The inputs held after tau belong to the next hop: hist_u_[1] until t1, hist_u_[0] until t.
+  const double carried = report_cost_.InputCost(hist_u_[1]) * (t1 - tau) +
+                         report_cost_.InputCost(hist_u_[0]) * (t - t1);
+  effort_ -= carried;
+  const FlightState14 start = hist_xf_[1] + w * (hist_xf_[0] - hist_xf_[1]);
+  EndHop(tau, start);
+  BeginHop(tau, start);
+  effort_ = carried;
+  TrajectoryRecorder& rec = recorders_[recording_];
+  rec.AddSample(0.0, start, hist_u_[1]);
+  if (t1 - tau > 1e-3 * (t1 - t0)) rec.AddSample(t1 - tau, hist_xf_[0], hist_u_[0]);
+  last_sample_t_ = t1 - tau;
 }
 
 void HopperController::AddStanceImpulse(const mjData* d, double h) {
@@ -336,49 +385,57 @@ void HopperController::Record(double t) {
   // The touchdown step recorded x^-(T1) as the flight's last sample; the first stance sample is
   // the first post-impact measurement (the next step), stamped at the switching instant T1.
   if (!flight && stance_first_) {
-    if (t > report_.t_touchdown) {
+    if (t > touchdown_step_) {
       last_sample_t_ = report_.t_touchdown - hop_start_;
       rec.AddSample(last_sample_t_, x, u_);
       stance_first_ = false;
     }
+  } else if (!flight && config_.contact.substep_events) {
+    // One step late: a takeoff found at the next step may fall before it (TakeoffInsideStep).
+    if (stance_pending_) rec.AddSample(hist_t_[0] - hop_start_, last_stance_, hist_u_[0]);
+    stance_pending_ = x.allFinite();
+    if (stance_pending_) last_sample_t_ = t - hop_start_;
   } else if (x.allFinite()) {
     last_sample_t_ = t - hop_start_;
     rec.AddSample(last_sample_t_, x, u_);
   }
 }
 
-void HopperController::BeginHop(double t) {
+void HopperController::BeginHop(double t, const FlightState14& x) {
   TrajectoryRecorder& rec = recorders_[recording_];
   rec.Clear();
   rec.BeginMode(hopper::kFlight);
   hop_start_ = t;
   phase_start_ = t;
-  hop_start_state_ = xf_;
+  hop_start_state_ = x;
   report_ = HopReport();
   report_.hop = hop_;
   report_.t_start = t;
-  report_.apex = xf_(hopper::kY);
+  report_.apex = x(hopper::kY);
+  stance_pending_ = false;
   effort_ = 0.0;
   stance_impulse_ = 0.0;
 }
 
-void HopperController::Touchdown(double t) {
+void HopperController::Touchdown(double t, const FlightState14& x) {
   TrajectoryRecorder& rec = recorders_[recording_];
   last_sample_t_ = t - hop_start_;
-  rec.AddSample(last_sample_t_, xf_, u_);  // x^-(T1) with the input held over the last step
+  rec.AddSample(last_sample_t_, x, u_);  // x^-(T1) with the input held over the last step
   rec.EndMode();
   rec.BeginMode(hopper::kStance);
-  x_touchdown_ = xf_;
+  x_touchdown_ = x;
   report_.t_touchdown = t;
   report_.t1 = last_sample_t_;
-  report_.body_touchdown = BodyState(xf_);
-  report_.foot_height_td = HopperModel::FootHeight(xf_);
-  foot_td_x_ = xf_(hopper::kX) + xf_(hopper::kR) * std::sin(xf_(hopper::kTheta));
+  report_.body_touchdown = BodyState(x);
+  report_.foot_height_td = HopperModel::FootHeight(x);
+  foot_td_x_ = x(hopper::kX) + x(hopper::kR) * std::sin(x(hopper::kTheta));
   phase_start_ = t;
   stance_first_ = true;
+  touchdown_step_ = last_time_;
+  stance_pending_ = false;
 }
 
-void HopperController::EndHop(double t) {
+void HopperController::EndHop(double t, const FlightState14& x) {
   // The measured part of the report. The stance ends with its last recorded sample, x^-(T2).
   recorders_[recording_].EndMode();
   HopReport& r = report_;
@@ -397,7 +454,7 @@ void HopperController::EndHop(double t) {
   r.alpha = law_->alpha();
   r.du2 = law_->du_squared_integral();
   r.dt2 = law_->dT().squaredNorm();
-  r.body_takeoff = BodyState(xf_);
+  r.body_takeoff = BodyState(x);
   const double stance_time = t - r.t_touchdown;
   const double dyd =
       r.body_takeoff(3) - r.body_touchdown(3) - robot_model_->opt.gravity[2] * stance_time;

@@ -171,11 +171,16 @@ class HopperController {
   void SetLawUnusable(const std::string& path, const std::string& why);
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void Step(const mjData* d);
-  void Touchdown(double t);
+  // The touchdown at t with x^-(T1) = x.
+  void Touchdown(double t, const FlightState14& x);
+  // ContactPhaseSettings::substep_events: the takeoff at the detector's event_time(), between the
+  // last two steps; the samples and the effort on either side go to their hop (step time t).
+  void TakeoffInsideStep(double t);
   // Adds the floor's vertical force over the last step [t - h, t] of a stance to stance_impulse_.
   void AddStanceImpulse(const mjData* d, double h);
-  void EndHop(double t);
-  void BeginHop(double t);
+  // The hop ends at t; x: the flight state there (the next hop's start).
+  void EndHop(double t, const FlightState14& x);
+  void BeginHop(double t, const FlightState14& x);
   void Record(double t);
   void TakeOfflineResult();
   void DeployLawWhenDue(double t);
@@ -229,6 +234,15 @@ class HopperController {
   int recording_ = 0;
   double last_sample_t_ = 0.0;  // trial time of the last recorded sample
   bool stance_first_ = false;   // the first stance sample (stamped at T1) is pending
+  double touchdown_step_ = 0.0;  // the step time of the touchdown (t_touchdown without substep)
+  // substep_events: the last two steps' times, flight states (both modes), inputs, the stance
+  // state of the step before last_stance_, and whether last_stance_ waits to be recorded (a
+  // takeoff found at the next step may fall before it).
+  double hist_t_[2] = {0.0, 0.0};
+  FlightState14 hist_xf_[2];
+  Eigen::Vector4d hist_u_[2];
+  Eigen::Matrix<double, 10, 1> prev_stance_;
+  bool stance_pending_ = false;
   HopReport report_;            // measured part, filled as the hop runs
   FlightState14 x_touchdown_;
   double effort_ = 0.0;         // int 1/2 u'Ru dt over the hop

@@ -231,8 +231,9 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    const py::iterable& pushes, bool no_pushes, const std::string& preset,
                    const py::object& offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
-                   int height, double fps, const std::string& law_cache) {
+                   int height, double fps, const std::string& law_cache, bool substep_events) {
   app::RunOverrides overrides;
+  overrides.substep_events = substep_events;
   overrides.method = method;
   overrides.hops = hops;
   overrides.seconds = seconds;
@@ -418,6 +419,7 @@ class RunFailed(RuntimeError):
           py::arg("offline_latency") = py::none(), py::arg("log_every") = 1,
           py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
           py::arg("height") = 480, py::arg("fps") = 60.0, py::arg("law_cache") = "",
+          py::arg("substep_events") = false,
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
 The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
@@ -437,6 +439,7 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   render_dir, width, height, fps  PNG frames, as --render/--width/--height/--fps (only when
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
+  substep_events   locate touchdown and takeoff inside the physics step (--substep-events)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,

@@ -125,6 +125,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   const ExperimentOverrides& x = s.experiment;
   if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
   if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;
+  if (s.substep_events) config.contact.substep_events = *s.substep_events;
   return config;
 }
 
@@ -133,6 +134,9 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--preset", preset,
                   "default | paper: the learner and the hopper's reading (overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
+  cli->add_flag("--substep-events", substep_events,
+                "locate touchdown and takeoff inside the physics step for the measured durations "
+                "and cost (ContactPhaseSettings::substep_events; overrides the scenario)");
   cli->add_option_function<std::string>(
          "--offline-latency",
          [this](const std::string& text) {
@@ -230,6 +234,7 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
     s.model_mjcf = o.model_mjcf;
     s.model_numbers = ModelNumbers();
   }
+  if (o.substep_events) s.substep_events = true;
   if (o.no_pushes) {
     s.pushes.clear();
     s.hop_pushes.clear();

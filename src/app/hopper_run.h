@@ -78,6 +78,7 @@ struct RunOverrides {
   std::string model_mjcf;                ///< --model-mjcf MJCF: replaces the scenario's <model>
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
+  bool substep_events = false;  ///< --substep-events: ContactPhaseSettings::substep_events on
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
   /// --offline-latency measured: ControllerConfig::measured_latency (the floor stays 0.02 s).
   bool measured_latency = false;

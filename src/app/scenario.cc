@@ -109,6 +109,7 @@ const std::vector<ElementSpec>& Elements() {
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
+      {"contact", false, {Text("substep_events")}},
       {"gait", false,
        {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
         Number("k0_leg", Closed(lo(hopper::kK0leg), hi(hopper::kK0leg)))}},
@@ -348,6 +349,8 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   } else if (tag == "experiment") {
     s->experiment.flight_pitch_feedback = GetNumber(path, e, "flight_pitch_feedback");
     s->experiment.from_hop = GetInteger(path, e, "from_hop");
+  } else if (tag == "contact") {
+    if (auto v = GetChoice(path, e, "substep_events", "off", "on")) s->substep_events = *v == "on";
   } else if (tag == "gait") {
     s->forward_speed = GetNumber(path, e, "speed").value_or(0.0);
     s->gait_k0_hip = GetNumber(path, e, "k0_hip");
@@ -365,7 +368,7 @@ void ParseChildren(const std::string& path, const Element* root, Scenario* s) {
     if (spec == nullptr) {
       Fail(path, e->GetLineNum(),
            "unknown element <" + tag + "> (expected robot, model, method, duration, push, "
-           "learning, experiment or gait)");
+           "learning, experiment, contact or gait)");
     }
     for (const auto& [name, line] : seen) {
       if (name == tag && !spec->repeatable) {

@@ -105,6 +105,8 @@ struct Scenario {
   std::optional<double> gait_k0_hip, gait_k0_leg;
   LearningOverrides learning;        // <learning .../>
   ExperimentOverrides experiment;    // <experiment .../>
+  // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
+  std::optional<bool> substep_events;
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.

@@ -217,6 +217,19 @@ TEST_F(ScenarioTest, PitchFeedbackExperiment) {
   ExpectError(Fill(fmt, "from_hop='2.5'"), {"from_hop", "integer"});
 }
 
+TEST_F(ScenarioTest, ContactSubstepEvents) {
+  const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><contact %s/></ddoc_scenario>";
+  EXPECT_FALSE(ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams())
+                   .contact.substep_events);  // the default: off
+  Scenario s = LoadScenario(Write(Fill(fmt, "substep_events='on'")));
+  EXPECT_TRUE(ControllerConfigFor(s, HopperParams()).contact.substep_events);
+  s = LoadScenario(Write(Fill(fmt, "substep_events='off'")));
+  EXPECT_FALSE(ControllerConfigFor(s, HopperParams()).contact.substep_events);
+  ExpectError(Fill(fmt, "substep_events='1'"), {"<contact>", "substep_events=\"1\"", "off or on"});
+  ExpectError(Fill(fmt, "takeoff_force='1'"),
+              {"<contact>", "unknown attribute takeoff_force", "expected substep_events"});
+}
+
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {
   ExpectError("<ddoc_scenario><robot mjcf='robot.xml'/>", {"s.xml", "malformed XML"});
   ExpectError("<scenario/>", {"<ddoc_scenario>"});

@@ -16,11 +16,11 @@
 namespace ddoc::plugin {
 namespace {
 
-TEST(ComputeAllocTest, ComputeDoesNotAllocateWhileLearning) {
+// Eight hops of learning on the default robot with `config` (host mode): no allocation in Compute.
+void ExpectComputeDoesNotAllocate(ControllerConfig config) {
   ASSERT_TRUE(testing::MallocCountingWorks());
   MjModelPtr model = LoadMjcf(std::string(DDOC_MODELS_DIR) + "/hopper_m8.xml");
   MjDataPtr data(mj_makeData(model.get()));
-  ControllerConfig config;  // defaults: offline_latency 20 ms, host mode
   config.gait.forward_speed = 0.5;
   std::string error;
   std::unique_ptr<HopperController> c = HopperController::Create(model.get(), WithTestLawCache(config), &error);
@@ -44,6 +44,16 @@ TEST(ComputeAllocTest, ComputeDoesNotAllocateWhileLearning) {
   EXPECT_EQ(c->hop(), 8);
   EXPECT_GT(c->learner()->trials(), 2);  // learning happened (in RunOffline)
   EXPECT_EQ(allocations, 0) << "over " << steps << " steps";
+}
+
+TEST(ComputeAllocTest, ComputeDoesNotAllocateWhileLearning) {
+  ExpectComputeDoesNotAllocate(ControllerConfig());  // defaults: offline_latency 20 ms
+}
+
+TEST(ComputeAllocTest, ComputeDoesNotAllocateWithSubstepEvents) {
+  ControllerConfig config;
+  config.contact.substep_events = true;  // the events located inside the step
+  ExpectComputeDoesNotAllocate(config);
 }
 
 }  // namespace

@@ -104,6 +104,18 @@ def test_run_hopper_law_cache(tmp_path):
         np.testing.assert_array_equal(first[name], second[name], err_msg=name)
 
 
+def test_run_hopper_substep_events():
+    # --substep-events: each hop starts where the previous one ended (at the located takeoff);
+    # at the step (default) one step (0.5 ms) after it, and T1 on the step grid.
+    kw = dict(method="ocfb", hops=3, log_every=0)
+    step = ddoc.run_hopper(SCENARIO, **kw)
+    inside = ddoc.run_hopper(SCENARIO, substep_events=True, **kw)
+    np.testing.assert_allclose(step["t_start"][1:] - step["t_end"][:-1], 0.0005, atol=1e-9)
+    np.testing.assert_array_equal(inside["t_start"][1:], inside["t_end"][:-1])
+    np.testing.assert_allclose(step["T1"] / 0.0005, np.round(step["T1"] / 0.0005), atol=1e-6)
+    assert np.all(np.abs(inside["T1"] / 0.0005 - np.round(inside["T1"] / 0.0005)) > 1e-3)
+
+
 def test_run_hopper_log_every():
     every = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1)["trajectory"]
     tenth = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, log_every=10)["trajectory"]

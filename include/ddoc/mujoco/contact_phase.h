@@ -18,6 +18,8 @@ struct ContactPhaseSettings {
   double takeoff_force = 0.5;
   /// No phase change within this time after the previous one (or after Reset), s.
   double min_phase_time = 0.03;
+  /// Events located inside the physics step (event_time(), class comment); default false.
+  bool substep_events = false;
 };
 
 /// What one Update found.
@@ -34,6 +36,14 @@ enum class ContactChange { kNone, kTouchdown, kTakeoff };
 ///     current state is the first state of the flight.
 ///   - min_phase_time after an event no new one: it rejects the one-step bounce MuJoCo shows at
 ///     some impacts.
+/// With substep_events, event_time() locates the event inside the step (linear in the signal
+/// between the two samples that bracket its threshold):
+///   - touchdown in (t_prev, t]: where the foot-floor distance crossed touchdown_distance. The
+///     distance is the contact's dist now and dist + the foot centre's move along the floor's
+///     normal before (a sphere on a plane, any slope); the semi-implicit Euler step moves the
+///     positions linearly over the step, so this is the crossing of the simulated path.
+///   - takeoff in [t_prev2, t_prev]: where the floor's vertical force crossed takeoff_force. The
+///     force read at a step was solved from the previous step's state: it is located there.
 /// Allocation-free.
 class ContactPhaseDetector {
  public:
@@ -47,13 +57,30 @@ class ContactPhaseDetector {
   ContactChange Update(const HopperMapping& map, const mjData* d);
 
   int mode() const { return mode_; }
+  /// The step time of the last event (d->time of the Update that found it), s.
   double last_event_time() const { return last_event_; }
+  /// The instant of the last event, s: last_event_time() without substep_events, else the
+  /// sub-step estimate (see the class comment; the step time when the detector has no samples
+  /// from before the event, e.g. right after Reset).
+  double event_time() const { return event_time_; }
   const ContactPhaseSettings& settings() const { return settings_; }
 
  private:
   ContactPhaseSettings settings_;
   int mode_ = 0;              // hopper::kFlight / kStance
   double last_event_ = -1e9;  // s
+  double event_time_ = -1e9;  // s
+  // substep_events: the previous Updates' times (t_prev, t_prev2), the foot centre's height along
+  // the floor's normal at t_prev, the vertical force read at t_prev, and how many are valid.
+  double time_prev_ = 0.0, time_prev2_ = 0.0;
+  double height_prev_ = 0.0, force_prev_ = 0.0;
+  int history_ = 0;
+  // The step-time detection (the class comment); sets mode_, last_event_ and event_time_.
+  ContactChange Detect(const HopperMapping& map, const mjData* d);
+  // Sets event_time_ for the event `change` just found at d->time (substep_events).
+  void LocateEvent(const HopperMapping& map, const mjData* d, ContactChange change);
+  // Remembers this Update's samples (substep_events).
+  void Remember(const HopperMapping& map, const mjData* d);
 };
 
 /// True when the current collision pass of d has a contact between the foot and the floor geoms
