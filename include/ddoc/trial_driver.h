@@ -39,6 +39,14 @@ struct HarmGuardSettings {
   /// standard errors of the difference (spread pooled over every law's re-runs), >= 0.
   /// Default 2.
   double margin = 2.0;
+  /// The watch: the last this many judged costs of a kept law's learning trials are compared
+  /// with the law it replaced and u^0; 0 = no watch (default: on the hopper a push made it go
+  /// back to a law that then fell, docs/experiments.md, "The harm guard"), else >= 2.
+  int watch_trials = 0;
+  /// true: a kept law's I^i becomes the mean learner cost of its re-runs instead of the accepted
+  /// trial's own cost, which its selection biased low. Default false (on the hopper's mass map
+  /// it learns more and survives less: docs/experiments.md, "The harm guard").
+  bool debias = false;
 };
 
 /// Settings of TrialDriver.

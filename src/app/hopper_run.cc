@@ -109,6 +109,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.hops_per_trial) config.driver.runs_per_trial = *l.hops_per_trial;
   if (l.verify_hops) config.driver.guard.verify_trials = *l.verify_hops;
   if (l.verify_margin) config.driver.guard.margin = *l.verify_margin;
+  if (l.watch_hops) config.driver.guard.watch_trials = *l.watch_hops;
+  if (l.verify_debias) config.driver.guard.debias = *l.verify_debias;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.start_correction) learner.start_correction = *l.start_correction;

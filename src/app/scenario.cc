@@ -105,7 +105,7 @@ const std::vector<ElementSpec>& Elements() {
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
         Text("blend_feedback"), Text("start_correction"),
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
-        Number("verify_margin", kNonNegative),
+        Number("verify_margin", kNonNegative), Text("verify_debias"), Integer("watch_hops", 0),
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
@@ -301,6 +301,8 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   l->restart_alpha = GetNumber(path, e, "restart_alpha");
   l->verify_hops = GetInteger(path, e, "verify_hops");
   l->verify_margin = GetNumber(path, e, "verify_margin");
+  l->watch_hops = GetInteger(path, e, "watch_hops");
+  if (auto v = GetChoice(path, e, "verify_debias", "off", "on")) l->verify_debias = *v == "on";
   l->curvature_scale_min = GetNumber(path, e, "curvature_scale_min");
 }
 

@@ -64,6 +64,8 @@ struct LearningOverrides {
   std::optional<int> hops_per_trial;    // TrialDriverSettings::runs_per_trial, >= 1
   std::optional<int> verify_hops;       // HarmGuardSettings::verify_trials, 0 or >= 2
   std::optional<double> verify_margin;  // HarmGuardSettings::margin, >= 0
+  std::optional<int> watch_hops;        // HarmGuardSettings::watch_trials, >= 2
+  std::optional<bool> verify_debias;    // HarmGuardSettings::debias
   std::optional<double> curvature_scale_min;  // LearnerSettings::curvature_scale_min, (0, 1]
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
   std::optional<bool> start_correction;  // "on"/"off": LearnerSettings::start_correction

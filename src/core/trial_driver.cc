@@ -31,6 +31,11 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
                           std::to_string(settings.guard.verify_trials) +
                           ", expected 0 (off) or >= 2 (the spread is estimated from the re-runs)");
   }
+  if (settings.guard.watch_trials < 0 || settings.guard.watch_trials == 1) {
+    throw InvalidArgument("TrialDriverSettings: guard.watch_trials = " +
+                          std::to_string(settings.guard.watch_trials) +
+                          ", expected 0 (no watch) or >= 2");
+  }
   if (!(settings.guard.margin >= 0) || !std::isfinite(settings.guard.margin)) {
     throw InvalidArgument("TrialDriverSettings: guard.margin = " +
                           std::to_string(settings.guard.margin) + ", expected finite and >= 0");
@@ -55,7 +60,7 @@ void TrialDriver::Reset() {
   verify_left_ = 0;
   new_runs_ = initial_runs_ = kept_runs_ = previous_runs_ = other_runs_ = Runs{};
   phase_ = Phase::kNone;
-  window_.assign(static_cast<size_t>(settings_.guard.verify_trials), 0.0);
+  window_.assign(static_cast<size_t>(settings_.guard.watch_trials), 0.0);
   window_count_ = 0;
   new_learner_sum_ = 0;
   initial_ = kept_ = previous_ = LearnerCheckpoint{};
@@ -124,8 +129,8 @@ void TrialDriver::Challenge(Target against, bool watch) {
 void TrialDriver::Watch(double judged) {
   // The kept law's trials: a window of their last verify_trials judged costs. Worse than the
   // law it replaced or u^0: that law runs again.
-  window_[static_cast<size_t>(window_count_ % settings_.guard.verify_trials)] = judged;
-  if (++window_count_ < settings_.guard.verify_trials) return;
+  window_[static_cast<size_t>(window_count_ % settings_.guard.watch_trials)] = judged;
+  if (++window_count_ < settings_.guard.watch_trials) return;
   Runs recent;
   for (double c : window_) recent.Add(c);
   const bool suspect =
@@ -219,7 +224,7 @@ void TrialDriver::KeepNew() {
   // it replaced is remembered.
   phase_ = Phase::kNone;
   Pool(new_runs_);
-  learner_->SetNominalCost(new_learner_sum_ / new_runs_.n);
+  if (settings_.guard.debias) learner_->SetNominalCost(new_learner_sum_ / new_runs_.n);
   previous_ = std::move(kept_);
   previous_runs_ = kept_runs_;
   kept_ = learner_->Save();
@@ -327,7 +332,8 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
       new_runs_ = Runs{};
       new_learner_sum_ = 0;
       UseLearnedLaw(learner_->nominal_law());
-    } else if (guard && kept_.valid && !learner_->nominal_is_initial() && learned_) {
+    } else if (guard && settings_.guard.watch_trials > 0 && kept_.valid &&
+               !learner_->nominal_is_initial() && learned_) {
       Watch(std::isfinite(out.judged_cost) ? out.judged_cost
                                            : std::numeric_limits<double>::infinity());
     }

@@ -427,6 +427,10 @@ TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
   one.guard.verify_trials = 1;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, one, fallback); },
                    "guard.verify_trials = 1, expected 0 (off) or >= 2");
+  TrialDriverSettings watch = DriverSettings(Method::kAlg1);
+  watch.guard.watch_trials = 1;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, watch, fallback); },
+                   "guard.watch_trials = 1, expected 0 (no watch) or >= 2");
   TrialDriverSettings margin = DriverSettings(Method::kAlg1);
   margin.guard.verify_trials = 2;
   margin.guard.margin = -1;
@@ -559,8 +563,9 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
 // A kept law that later measures worse: the plant's input gain flips after the learner kept a
 // law (a motor wired the other way round, an extreme of a weaker motor). u^0 = 0 uses no input
 // and does not notice; every law that uses input now costs more. The guard watches the kept
-// law's trials: once their last 3 judged costs are worse than u^0's, u^0 runs 3 times, and the
-// learner goes back to u^0's nominal.
+// law's trials (watch_trials = 3): once their last 3 judged costs are worse than u^0's, u^0 runs
+// 3 times, and the learner goes back to u^0's nominal. Without the watch (the default) the law
+// stays.
 TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
   TwoModeLq flipped_lq;
   flipped_lq.b_scale = -1.0;
@@ -568,6 +573,7 @@ TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
   ModelPlant flipped_plant(flipped.problem);
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
+  settings.guard.watch_trials = 3;
   TrialDriver driver(p.problem, settings, fallback);
   Trajectory measured;
   int i = 0;
@@ -586,6 +592,14 @@ TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
   }
   ASSERT_EQ(driver.reverts(), 1);
   ASSERT_GE(o.size(), 6u);
+  {
+    settings.guard.watch_trials = 0;
+    TrialDriver unwatched(p.problem, settings, fallback);
+    for (int j = 0; j < i; ++j) unwatched.RunTrial(plant, lq.x0, &measured);
+    for (int j = 0; j < 20; ++j) unwatched.RunTrial(flipped_plant, lq.x0, &measured);
+    EXPECT_EQ(unwatched.reverts(), 0);
+    EXPECT_FALSE(unwatched.learner()->nominal_is_initial());
+  }
   // The revert follows 3 runs of u^0 (the challenge), which cost what u^0 costs.
   for (size_t j = o.size() - 3; j < o.size(); ++j) {
     EXPECT_TRUE(o[j].ran_fallback && o[j].remeasured) << "trial " << j;
@@ -597,6 +611,35 @@ TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
   for (size_t j = o.size() - 6; j < o.size() - 3; ++j) {
     EXPECT_FALSE(o[j].remeasured) << "trial " << j;
     EXPECT_GT(o[j].judged_cost, u0_flipped) << "trial " << j;
+  }
+}
+
+// A kept law's I^i is the mean learner cost of its re-runs, not the accepted trial's own cost
+// (the minimum of a selection). Trials start alternately at x0 and 1.1 x0 so that runs of one
+// law differ; with debias = false the accepted trial's cost stays.
+TEST_F(TrialDriverTest, AKeptLawsCostIsTheMeanOfItsReRuns) {
+  for (bool debias : {true, false}) {
+    TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+    settings.guard.verify_trials = 3;
+    settings.guard.margin = 100;  // keep every law: this test is about I^i
+    settings.guard.debias = debias;
+    TrialDriver driver(p.problem, settings, fallback);
+    Trajectory measured;
+    std::vector<TrialOutcome> o;
+    size_t kept = 0;
+    for (int i = 0; i < 40 && kept == 0; ++i) {
+      o.push_back(driver.RunTrial(plant, i % 2 == 0 ? Vector(lq.x0) : Vector(1.1 * lq.x0),
+                                  &measured));
+      const size_t n = o.size();
+      if (n >= 4 && o[n - 4].learned && o[n - 4].accepted && o[n - 1].remeasured &&
+          driver.verifying() == 0) {
+        kept = n - 4;
+      }
+    }
+    ASSERT_GT(kept, 0u) << "debias " << debias;
+    const double mean = (o[kept + 1].cost + o[kept + 2].cost + o[kept + 3].cost) / 3;
+    ASSERT_GT(std::abs(mean - o[kept].cost), 1e-6 * mean) << "premise: runs differ";
+    EXPECT_DOUBLE_EQ(driver.learner()->nominal_cost(), debias ? mean : o[kept].cost);
   }
 }
 
