@@ -426,10 +426,12 @@ def converged_hop(hops, eps=DEFAULT_EPS, delta_i=DEFAULT_DELTA_I):
     if delta_i < 1:
         raise ValueError(f"delta_i must be >= 1, got {delta_i}")
     streak = 0
+    has = hops.has("remeasured") if hasattr(hops, "has") else "remeasured" in hops
+    rerun = hops["remeasured"] if has else None
     for k in range(len(hops["hop"])):
         if not hops["accepted"][k] > 0.5:
             continue
-        if hops.has("remeasured") and hops["remeasured"][k] > 0.5:
+        if rerun is not None and rerun[k] > 0.5:
             continue  # a re-run of the nominal's law, not an iteration
         d = hops["du2"][k] + hops["dT2"][k]
         if math.isfinite(d) and d <= eps:
