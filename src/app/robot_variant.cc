@@ -14,11 +14,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The shortest text that reads back as v (0.6, not 0.59999999999999998).
 std::string Number(double v) {
-  std::ostringstream out;
-  out.precision(17);
-  out << v;
-  return out.str();
+  std::string text;
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::ostringstream out;
+    out.precision(digits);
+    out << v;
+    text = out.str();
+    if (std::strtod(text.c_str(), nullptr) == v) break;
+  }
+  return text;
 }
 
 std::string Where(const std::string& file, const tinyxml2::XMLElement* e) {
