@@ -39,8 +39,8 @@ LearnerSettings HopperModelSolveSettings();
 LearnerSettings HopperPaperLearnerSettings();
 
 /// The trial driver on the hopper: Algorithm 1 with one "Initialize" hop of u^0 (as printed),
-/// learner = HopperLearnerSettings() (kDefault) or HopperPaperLearnerSettings() (kPaper); kDefault
-/// also runs the harm guard with verify_trials = 3 (NOT the paper; docs/engine.md).
+/// learner = HopperLearnerSettings() (kDefault) or HopperPaperLearnerSettings() (kPaper); the
+/// harm guard off (an option: docs/engine.md, "Never keeping harm").
 TrialDriverSettings HopperTrialSettings(Preset preset = Preset::kDefault);
 
 /// Duration bounds of the hopper's modes (Bounds::duration_min/max), s.
