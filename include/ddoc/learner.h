@@ -382,6 +382,8 @@ class Learner {
   TrialResult Reported(TrialResult r) const;
   // restart_on_failure: alpha <- restart_alpha (or alpha_initial) around the same nominal.
   void RestartLineSearch(TrialResult* r);
+  // The alpha a restarted line search (and Restore) starts at: restart_alpha, else alpha_initial.
+  double RestartAlpha() const;
   // alpha < alpha_min: restart (online), raise mu and search again (failure_raises), or
   // terminate.
   void LineSearchExhausted(TrialResult* r);

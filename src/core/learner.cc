@@ -241,8 +241,12 @@ double Learner::StartShift(const ConstVectorRef& x0) const {
   return std::isfinite(shift) ? shift : 0.0;
 }
 
+double Learner::RestartAlpha() const {
+  return settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;
+}
+
 void Learner::RestartLineSearch(TrialResult* r) {
-  alpha_ = settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;
+  alpha_ = RestartAlpha();
   ++restarts_;
   r->restarted = true;
   remeasure_pending_ = settings_.remeasure_nominal;
@@ -464,7 +468,7 @@ void Learner::Restore(const LearnerCheckpoint& c) {
   last_sample_ = c.cost;
   failure_raises_ = 0;
   curvature_scale_ = 1;
-  alpha_ = settings_.restart_alpha > 0 ? settings_.restart_alpha : settings_.alpha_initial;  // as a restart
+  alpha_ = RestartAlpha();
   status_ = LearnerStatus::kRunning;
   if (!RunPass()) {
     throw InvalidArgument("Learner::Restore: the backward pass failed along the checkpoint's "

@@ -83,7 +83,7 @@ double TrialDriver::JudgedCost(const Trajectory& measured, bool learns) {
   if (!reference_) return EvaluateCost(*problem_, measured).total;
   reference_(measured, false);
   const double cost = EvaluateCost(*problem_, measured).total;
-  reference_(measured, learns);  // back to the reference the learner works with
+  reference_(measured, learns);  // leaves the reference the learner works with set
   return cost;
 }
 
@@ -127,7 +127,7 @@ void TrialDriver::Challenge(Target against, bool watch) {
 }
 
 void TrialDriver::Watch(double judged) {
-  // The kept law's trials: a window of their last verify_trials judged costs. Worse than the
+  // The kept law's trials: a window of their last watch_trials judged costs. Worse than the
   // law it replaced or u^0: that law runs again.
   window_[static_cast<size_t>(window_count_ % settings_.guard.watch_trials)] = judged;
   if (++window_count_ < settings_.guard.watch_trials) return;
@@ -149,9 +149,8 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
   out.accepted = true;
   out.remeasured = true;
   out.ran_fallback = runs_fallback();
-  if (reference_) reference_(measured, true);
+  out.judged_cost = JudgedCost(measured, true);  // then the learner's reference for out.cost
   out.cost = EvaluateCost(*problem_, measured).total;
-  out.judged_cost = JudgedCost(measured, true);
   out.nominal_cost = learner_->nominal_cost();
   out.status = learner_->status();
   const double judged = std::isfinite(out.judged_cost) ? out.judged_cost
@@ -202,8 +201,7 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
     return out;
   }
   Pool(new_runs_);
-  if (reference_) reference_(measured, true);
-  learner_->Restore(Checkpoint(target_));
+  learner_->Restore(Checkpoint(target_));  // (30) under the learner's reference, still set
   if (target_ == Target::kInitial) {
     kept_ = previous_ = LearnerCheckpoint{};
   } else if (target_ == Target::kPrevious) {
@@ -255,8 +253,11 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
   out.ran_fallback = runs_fallback();
   const bool learns = CompletionLearns();
   const bool guard = settings_.guard.verify_trials > 0 && learner_ != nullptr && !frozen_;
-  if (guard) out.judged_cost = JudgedCost(measured, learns);
-  if (reference_) reference_(measured, learns);
+  if (guard) {
+    out.judged_cost = JudgedCost(measured, learns);  // leaves the learner's reference set
+  } else if (reference_) {
+    reference_(measured, learns);
+  }
   // runs_per_trial: the runs of a law the learner judges are averaged; all but the last only
   // report, and the law runs again.
   std::optional<double> mean_cost;

@@ -317,9 +317,6 @@ TEST(HopperControllerTest, ShortLearningRunLowersTheCost) {
   // hop-to-hop cost varies more than a few hops of learning can gain.)
   ControllerConfig config;
   config.driver.warmup_trials = 3;  // the learner starts from the third hop of u^0, a bad one
-  // The learner's steps alone: the harm guard's re-runs (3 hops per accepted law) would leave
-  // too few learning hops in 10 (TrialDriverTest.TheHarmGuard* test the guard).
-  config.driver.guard.verify_trials = 0;
   for (LearnerSettings* s : {&config.driver.learner, &config.model_learner}) {
     s->backward.cyclic_value = 0.0;
     s->backward.terminal_event = false;
