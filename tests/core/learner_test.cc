@@ -10,6 +10,7 @@
 
 #include "ddoc/learner.h"
 #include "test_systems.h"
+#include "test_util.h"
 #include "two_mode_lq.h"
 
 namespace ddoc {
@@ -806,12 +807,7 @@ TEST(Learner, ConvergedLqrGainIsTheExactOne) {
   Problem problem;
   problem.system = &sys;
   problem.cost = &cost;
-  const double inf = std::numeric_limits<double>::infinity();
-  problem.bounds.u_min = Vector::Constant(1, -inf);
-  problem.bounds.u_max = Vector::Constant(1, inf);
-  problem.bounds.duration_min = Vector::Constant(1, T);
-  problem.bounds.duration_max = Vector::Constant(1, T);
-  problem.surface_weights = Vector::Zero(1);
+  PoseFixedHorizon(&problem, 1, T);
   ModelPlant plant(problem);
   FunctionPolicy initial(Vector::Constant(1, T),
                          [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });

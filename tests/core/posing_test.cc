@@ -20,6 +20,7 @@
 #include "ddoc/quadratic_cost.h"
 #include "standard_problems.h"
 #include "standard_references.h"
+#include "test_util.h"
 
 namespace ddoc {
 namespace testing {
@@ -136,11 +137,7 @@ TEST(FeedbackLaw, IsTheContinuousTimeLqrGain) {
   Problem problem;
   problem.system = &system;
   problem.cost = &cost;
-  problem.bounds.u_min = Vector::Constant(2, -kInf);
-  problem.bounds.u_max = Vector::Constant(2, kInf);
-  problem.bounds.duration_min = Vector::Constant(1, T);
-  problem.bounds.duration_max = Vector::Constant(1, T);
-  problem.surface_weights = Vector::Zero(1);
+  PoseFixedHorizon(&problem, 2, T);
   ModelPlant plant(problem);
   FunctionPolicy initial(Vector::Constant(1, T),
                          [](int, double, const ConstVectorRef&, VectorRef u) { u.setZero(); });

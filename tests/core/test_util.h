@@ -5,16 +5,29 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "ddoc/problem.h"
 #include "ddoc/switched_system.h"
 
 namespace ddoc {
 namespace testing {
+
+/// Poses a one-mode problem on a fixed horizon (the LQR-type problems): `inputs` unbounded
+/// inputs, the mode's duration fixed at T, no switching surfaces. System and cost are the caller's.
+inline void PoseFixedHorizon(Problem* problem, int inputs, double T) {
+  const double inf = std::numeric_limits<double>::infinity();
+  problem->bounds.u_min = Vector::Constant(inputs, -inf);
+  problem->bounds.u_max = Vector::Constant(inputs, inf);
+  problem->bounds.duration_min = Vector::Constant(1, T);
+  problem->bounds.duration_max = Vector::Constant(1, T);
+  problem->surface_weights = Vector::Zero(1);
+}
 
 /// Runs f and expects an InvalidArgument whose message contains `text`.
 inline void ExpectThrowsWith(const std::function<void()>& f, const std::string& text) {
