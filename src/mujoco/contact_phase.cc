@@ -42,12 +42,7 @@ double Crossing(double a, double b, double level) {
 }  // namespace
 
 bool FootTouchesFloor(const HopperMapping& map, const mjData* d, double distance) {
-  for (int i = 0; i < d->ncon; ++i) {
-    const mjContact& c = d->contact[i];
-    const bool pair = IsFootFloor(map, c);
-    if (pair && c.dist < distance) return true;
-  }
-  return false;
+  return FootFloorDistance(map, d) < distance;
 }
 
 ContactPhaseDetector::ContactPhaseDetector(const ContactPhaseSettings& s) : settings_(s) {
