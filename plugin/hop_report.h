@@ -5,6 +5,7 @@
 #define DDOC_PLUGIN_HOP_REPORT_H_
 
 #include <limits>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -41,6 +42,10 @@ struct HopReport {
   double stance_mass = std::numeric_limits<double>::quiet_NaN();
   /// The stance's balance for MassIdentification (docs/hopper.md, "Identifying the mass").
   HopIdentificationData identification;
+  /// MassIdentification's estimate after this hop's stance, kg (NaN: no stance yet).
+  double identified_mass = std::numeric_limits<double>::quiet_NaN();
+  /// The model's M when the hop ended, kg (changes only with ControllerConfig::identification).
+  double model_mass = std::numeric_limits<double>::quiet_NaN();
   // From the trial driver (TrialOutcome):
   bool accepted = false;        ///< (36) held (true for trials it does not judge)
   double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)
@@ -61,6 +66,15 @@ struct HopReport {
   /// Simulated time from the hop's end until the law learned from it took effect, ms: the
   /// configured offline_latency, or with measured_latency max(it, offline_ms) (NaN: no law).
   double latency_ms = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One re-solve of u^0 on an identified model (IdentificationSettings).
+struct ModelResolve {
+  int hop = 0;            ///< the hop whose stance made the model leave the estimate's region
+  double mass = 0.0;      ///< the new model's M, kg
+  double wall_ms = 0.0;   ///< wall time of the re-solve (gait + u^0, or the law cache), ms
+  int took_over_hop = -1; ///< the hop in which the new u^0 took over (-1: not yet)
+  std::string law_cache;  ///< where the new u^0 came from (as law_cache_status())
 };
 
 }  // namespace ddoc::plugin

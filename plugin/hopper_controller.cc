@@ -44,12 +44,93 @@ void ValidateConfig(const ControllerConfig& c) {
   if (c.pitch_experiment.from_hop < 0) {
     fail("pitch_experiment.from_hop", c.pitch_experiment.from_hop, ">= 0");
   }
+  const IdentificationSettings& id = c.identification;
+  if (id.settle_hops < 0) fail("identification.settle_hops", id.settle_hops, ">= 0");
+  if (!(id.mass_resolution > 0.0) || !std::isfinite(id.mass_resolution)) {
+    fail("identification.mass_resolution", id.mass_resolution, "finite and > 0");
+  }
+  if (!(id.resolve_latency >= 0.0) || !std::isfinite(id.resolve_latency)) {
+    fail("identification.resolve_latency", id.resolve_latency, "finite and >= 0");
+  }
+  MassIdentification check(id.estimator);  // throws naming a bad estimator setting
 }
 
 ModelPlantSettings ModelPlantSettingsFor(const ControllerConfig& c) {
   ModelPlantSettings s;
   s.dt = c.dt_model;
   return s;
+}
+
+// Where u^0 came from (HopperController::law_cache_status()) and what the model solve gave.
+struct InitialLaw {
+  double cost = 0.0;
+  int iterations = 0;
+  std::string status = "solved";
+  bool trouble = false;
+};
+
+// The nominal gait of config.model into *gait and u^0 into *law: loaded from config.law_cache
+// when a law stored there has this solve's key, else solved on (problem, plant, cost) and stored.
+InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& problem,
+                           ModelPlant* plant, HopperCost* cost, OnlineController* law,
+                           NominalGait* gait) {
+  InitialLaw out;
+  *gait = FindNominalGait(config.model, config.gait);
+  std::string key, unusable;  // unusable: " (<file>: <why>)" when a stored law was not usable
+  if (!config.law_cache.empty()) {
+    key = InitialLawKey(config);
+    if (key.empty()) {
+      out.status = "solved; not stored: no GNU build id to key the law by";
+      out.trouble = true;
+    }
+  }
+  if (!key.empty()) {
+    StoredInitialLaw stored;
+    std::string why;
+    const std::string path = InitialLawPath(config.law_cache, key);
+    bool loaded = ReadInitialLaw(config.law_cache, key, &stored, &why);
+    if (loaded) {
+      try {
+        law->Allocate(problem, config.model_learner.max_samples, config.model_learner.controller);
+        law->ImportLaw(stored.law);
+      } catch (const InvalidArgument& e) {
+        loaded = false;
+        why = e.what();
+      }
+    }
+    if (loaded) {
+      cost->SetReference(gait->x0);  // as SolveFromGait leaves it
+      out.cost = stored.model_cost;
+      out.iterations = stored.model_iterations;
+      out.status = "loaded " + path;
+      return out;
+    }
+    if (why != "no file") {
+      unusable = " (" + path + ": " + why + ")";
+      out.trouble = true;
+    }
+  }
+  Learner model_learner(problem, config.model_learner);
+  const SolveResult solved = SolveFromGait(model_learner, *plant, cost, *gait);
+  out.cost = solved.cost;
+  out.iterations = solved.iterations;
+  if (!std::isfinite(out.cost)) {
+    throw InvalidArgument("the model-based initial solve produced a non-finite cost");
+  }
+  *law = model_learner.ConvergedPolicy(config.ocfb_alpha);
+  if (key.empty()) return out;
+  StoredInitialLaw stored;
+  stored.law = law->ExportLaw();
+  stored.model_cost = out.cost;
+  stored.model_iterations = out.iterations;
+  std::string why;
+  if (WriteInitialLaw(config.law_cache, key, stored, &why)) {
+    out.status = "stored " + InitialLawPath(config.law_cache, key) + unusable;
+  } else {
+    out.status = "solved; not stored: " + why + unusable;
+    out.trouble = true;
+  }
+  return out;
 }
 
 HopperController* g_attached = nullptr;
@@ -64,8 +145,9 @@ HopperController::HopperController(const mjModel* m, const ControllerConfig& con
     : config_(config),
       map_(HopperMapping::Build(m, "the robot's mjModel")),
       model_(config.model),
+      report_model_(config.model),
       cost_(model_, config.cost_weights),
-      report_cost_(model_, config.cost_weights),
+      report_cost_(report_model_, config.cost_weights),
       problem_(HopperProblem(model_, cost_, config.durations)),
       model_plant_(problem_, ModelPlantSettingsFor(config)),
       detector_(config.contact),
@@ -98,24 +180,16 @@ void HopperController::Initialize() {
   model_plant_.set_guard([this](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
     return model_.Guard(k, x, u);
   });
+  mass_id_ = MassIdentification(config_.identification.estimator);
   // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
-  gait_ = FindNominalGait(config_.model, config_.gait);
-  if (!LoadInitialLaw()) {
-    Learner model_learner(problem_, config_.model_learner);
-    const SolveResult solved = SolveFromGait(model_learner, model_plant_, &cost_, gait_);
-    model_cost_ = solved.cost;
-    model_iterations_ = solved.iterations;
-    if (!std::isfinite(model_cost_)) {
-      throw InvalidArgument("the model-based initial solve produced a non-finite cost");
-    }
-    fallback_ = model_learner.ConvergedPolicy(config_.ocfb_alpha);
-    StoreInitialLaw();
-  }
+  const InitialLaw u0 =
+      SolveInitialLaw(config_, problem_, &model_plant_, &cost_, &fallback_, &gait_);
+  model_cost_ = u0.cost;
+  model_iterations_ = u0.iterations;
+  law_cache_status_ = u0.status;
+  law_cache_trouble_ = u0.trouble;
   bridge_ = fallback_;
-  const bool mrl = config_.driver.method == Method::kMrl;
-  driver_ = std::make_unique<TrialDriver>(
-      problem_, config_.driver, fallback_, mrl ? &prediction_plant_ : nullptr,
-      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
+  MakeDriver(config_.driver.warmup_trials);
   if (config_.pitch_experiment.scale != 1.0) {
     pitch_scale_ = {Vector::Ones(hopper::kFlightDim), Vector::Ones(hopper::kStanceDim)};
     pitch_scale_[hopper::kFlight](hopper::kPhi) = config_.pitch_experiment.scale;
@@ -128,54 +202,57 @@ void HopperController::Initialize() {
   }
 }
 
-bool HopperController::LoadInitialLaw() {
-  if (config_.law_cache.empty()) return false;
-  law_key_ = InitialLawKey(config_);
-  if (law_key_.empty()) {
-    law_cache_status_ = "solved; not stored: no GNU build id to key the law by";
-    law_cache_trouble_ = true;
-    return false;
-  }
-  StoredInitialLaw stored;
-  std::string why;
-  const std::string path = InitialLawPath(config_.law_cache, law_key_);
-  if (!ReadInitialLaw(config_.law_cache, law_key_, &stored, &why)) {
-    if (why != "no file") SetLawUnusable(path, why);
-    return false;
-  }
-  try {
-    fallback_.Allocate(problem_, config_.model_learner.max_samples,
-                       config_.model_learner.controller);
-    fallback_.ImportLaw(stored.law);
-  } catch (const InvalidArgument& e) {
-    SetLawUnusable(path, e.what());
-    return false;
-  }
-  cost_.SetReference(gait_.x0);  // as SolveFromGait leaves it
-  model_cost_ = stored.model_cost;
-  model_iterations_ = stored.model_iterations;
-  law_cache_status_ = "loaded " + path;
-  return true;
+void HopperController::MakeDriver(int warmup) {
+  TrialDriverSettings settings = config_.driver;
+  settings.warmup_trials = std::max(settings.warmup_trials, warmup);
+  const bool mrl = settings.method == Method::kMrl;
+  driver_ = std::make_unique<TrialDriver>(
+      problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
+      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
 }
 
-void HopperController::SetLawUnusable(const std::string& path, const std::string& why) {
-  law_unusable_ = " (" + path + ": " + why + ")";
-  law_cache_trouble_ = true;
+void HopperController::ResolveModel(double mass) {
+  // Objects of its own: the simulation side keeps using model_ and fallback_ meanwhile.
+  ControllerConfig config = config_;
+  config.model.M = mass;
+  HopperModel model(config.model);
+  HopperCost cost(model, config.cost_weights);
+  const Problem problem = HopperProblem(model, cost, config.durations);
+  ModelPlant plant(problem, ModelPlantSettingsFor(config));
+  plant.set_guard([&model](int k, const ConstVectorRef& x, const ConstVectorRef& u) {
+    return model.Guard(k, x, u);
+  });
+  OnlineController law;
+  const InitialLaw u0 = SolveInitialLaw(config, problem, &plant, &cost, &law, &staged_.gait);
+  // The staged law belongs to problem_ (the same sizes and bounds; its system becomes this
+  // model when it takes over).
+  staged_.law.Allocate(problem_, config.model_learner.max_samples,
+                       config.model_learner.controller);
+  staged_.law.ImportLaw(law.ExportLaw());
+  staged_.params = config.model;
+  staged_.cost = u0.cost;
+  staged_.iterations = u0.iterations;
+  staged_.ready = true;
+  staged_.record = ModelResolve();
+  staged_.record.hop = job_hop_;
+  staged_.record.mass = mass;
+  staged_.record.law_cache = u0.status;  // RunOffline sets wall_ms
 }
 
-void HopperController::StoreInitialLaw() {
-  if (config_.law_cache.empty() || law_key_.empty()) return;
-  StoredInitialLaw stored;
-  stored.law = fallback_.ExportLaw();
-  stored.model_cost = model_cost_;
-  stored.model_iterations = model_iterations_;
-  std::string why;
-  if (WriteInitialLaw(config_.law_cache, law_key_, stored, &why)) {
-    law_cache_status_ = "stored " + InitialLawPath(config_.law_cache, law_key_) + law_unusable_;
-  } else {
-    law_cache_status_ = "solved; not stored: " + why + law_unusable_;
-    law_cache_trouble_ = true;
-  }
+void HopperController::TakeOverResolvedModel() {
+  model_ = HopperModel(staged_.params);  // problem_, cost_ and the plants point at model_
+  gait_ = staged_.gait;
+  std::swap(fallback_, staged_.law);
+  bridge_ = fallback_;
+  model_cost_ = staged_.cost;
+  model_iterations_ = staged_.iterations;
+  staged_.ready = false;
+  resolves_.back().took_over_hop = hop_;
+  // The running hop is the new driver's trial 0, settle_hops whole hops follow, then its
+  // "Initialize" hop: settle_hops + 2 warm-up trials.
+  MakeDriver(config_.identification.settle_hops + 2);
+  law_ = &fallback_;
+  law_->BeginTrial();
 }
 
 void HopperController::PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t) {
@@ -195,6 +272,9 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
   FinishOffline();
   robot_model_ = m;
   robot_data_ = d;
+  // What identification learned stays (the same robot): a staged u^0 takes over now.
+  if (staged_.ready) TakeOverResolvedModel();
+  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
   driver_->Reset();
   waiting_.clear();
   reports_.clear();
@@ -217,6 +297,7 @@ void HopperController::RestartHop(const mjModel* m, mjData* d, const FlightState
   if (law_pending_) {  // the law of the running hop takes effect now
     law_ = next_law_;
     law_pending_ = false;
+    if (staged_.ready) TakeOverResolvedModel();
   }
   PlaceAtTakeoff(m, d, x.data(), d->time);
   law_->BeginTrial();
@@ -463,6 +544,15 @@ void HopperController::EndHop(double t, const FlightState14& x) {
     r.identification.stance_impulse = stance_impulse_;
     r.identification.stance_velocity = dyd;
   }
+  mass_id_.Add(r.identification);
+  const MassIdentification::Estimate estimate = mass_id_.estimate();
+  r.identified_mass = estimate.mass;
+  r.model_mass = model_.params().M;
+  const double resolution = config_.identification.mass_resolution;
+  if (config_.identification.mass && std::isnan(resolve_request_) && std::isnan(job_resolve_) &&
+      !staged_.ready && mass_id_.LeavesModel(r.model_mass)) {
+    resolve_request_ = std::max(resolution, std::round(estimate.mass / resolution) * resolution);
+  }
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
   // thread only) or the law it learned has not taken effect yet (measured_latency): then this
@@ -480,11 +570,14 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   recording_ = 1 - recording_;  // the finished hop's recorder now belongs to the offline part
   job_hop_ = hop_;
   job_end_ = t;
+  job_resolve_ = resolve_request_;  // the offline part re-solves u^0 after the trial
+  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
   ++hop_;
   job_.store(Job::kPosted, std::memory_order_release);
   if (Synchronous()) {
     RunOffline();  // synchronous: the old behaviour, for comparison only
     law_ = next_law_;
+    if (staged_.ready) TakeOverResolvedModel();
   } else {
     if (worker_.joinable()) {
       { std::lock_guard<std::mutex> lock(worker_mutex_); }
@@ -512,6 +605,13 @@ void HopperController::RunOffline() {
                                          : std::vector<Vector>());
     }
     next_law_ = learned != nullptr ? learned : &fallback_;
+    if (!std::isnan(job_resolve_)) {
+      const auto resolve_start = std::chrono::steady_clock::now();
+      ResolveModel(job_resolve_);
+      staged_.record.wall_ms =
+          1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - resolve_start)
+                    .count();
+    }
     offline_error_.clear();
   } catch (const std::exception& e) {
     offline_error_ = std::string("offline part: ") + e.what();
@@ -532,6 +632,10 @@ void HopperController::TakeOfflineResult() {
   // measured_latency: the law takes effect no sooner than this computer produced it.
   double latency = config_.offline_latency;
   if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
+  if (!std::isnan(job_resolve_) && staged_.ready) resolves_.push_back(staged_.record);
+  job_resolve_ = std::numeric_limits<double>::quiet_NaN();
+  if (staged_.ready && !Synchronous()) law_pending_ = true;  // the re-solved u^0 takes over
+  if (staged_.ready) latency = std::max(latency, config_.identification.resolve_latency);
   if (law_pending_) law_due_ = job_end_ + latency;
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;
@@ -564,9 +668,13 @@ void HopperController::DeployLawWhenDue(double t) {
   // A law changes only in flight: one that arrives in stance waits for the next hop, which then
   // runs u^0 and is not learned from (EndHop).
   if (mode() != hopper::kFlight) return;
+  law_pending_ = false;
+  if (staged_.ready) {  // a re-solved u^0 (identification) rather than a learned law
+    TakeOverResolvedModel();
+    return;
+  }
   law_ = next_law_;
   law_->BeginTrial();
-  law_pending_ = false;
 }
 
 void HopperController::FinishOffline() {

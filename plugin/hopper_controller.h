@@ -9,6 +9,7 @@
 #define DDOC_PLUGIN_HOPPER_CONTROLLER_H_
 
 #include <atomic>
+#include <limits>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -21,6 +22,7 @@
 #include "ddoc/hopper/hopper_cost.h"
 #include "ddoc/hopper/hopper_learning.h"
 #include "ddoc/hopper/hopper_model.h"
+#include "ddoc/hopper/identification.h"
 #include "ddoc/hopper/nominal_gait.h"
 #include "ddoc/hopper/vsa.h"
 #include "ddoc/mujoco/contact_phase.h"
@@ -39,6 +41,32 @@ namespace ddoc::plugin {
 struct PitchFeedbackExperiment {
   double scale = 1.0;  ///< in [0, 1]; 1 = off (the law as computed)
   int from_hop = 10;   ///< first hop whose learned law is scaled, >= 0
+};
+
+/// Online identification of the model's mass (docs/hopper.md, "Identifying the mass"): every
+/// hop's stance feeds MassIdentification; when `mass` is on and the model's M leaves the
+/// estimate's confidence region, u^0 is solved again on the model with the estimated M (through
+/// the law cache), and every method goes on from it with a new driver. Off by default (the paper
+/// keeps the model fixed).
+struct IdentificationSettings {
+  bool mass = false;  ///< act on the estimate (re-solve u^0); false: estimate and report only
+  /// The estimate's gate and confidence; default min_samples 2 (a decision after two stances),
+  /// z 3, relative_tolerance 1 %.
+  MassIdentification::Settings estimator = DefaultEstimator();
+  double mass_resolution = 0.001;  ///< the re-solved model's M is the estimate rounded to this, kg
+  /// Whole hops of the new u^0 before the new driver's "Initialize" hop (the hop in which the
+  /// new law took over is not counted), >= 0; default 2.
+  int settle_hops = 2;
+  /// Simulated s from the identifying hop's end until the re-solved u^0 may take over (the
+  /// offline part solves the gait and u^0 meanwhile; with measured_latency at least its wall
+  /// time), >= 0; default 2 s. ModelResolve::wall_ms says what this computer took.
+  double resolve_latency = 2.0;
+
+  static MassIdentification::Settings DefaultEstimator() {
+    MassIdentification::Settings s;
+    s.regression.min_samples = 2;
+    return s;
+  }
 };
 
 /// Configuration of HopperController. Plain struct; every field has a default.
@@ -67,6 +95,7 @@ struct ControllerConfig {
   /// true: the offline part runs on a worker thread (as on a robot); false: in RunOffline().
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
+  IdentificationSettings identification;     ///< mass estimate always; acting on it off
   /// Directory of stored u^0 laws (plugin/law_cache.h): Create loads u^0 from it when the model
   /// solve's inputs and binaries match, else solves and stores. "" (default) = always solve.
   std::string law_cache;
@@ -87,7 +116,8 @@ class HopperController {
   HopperController(const HopperController&) = delete;
   HopperController& operator=(const HopperController&) = delete;
 
-  /// Puts the robot at the nominal gait's takeoff state at time 0 and restarts learning from u^0.
+  /// Puts the robot at the nominal gait's takeoff state at time 0 and restarts learning from u^0
+  /// (a model that identification re-solved stays).
   void Reset(const mjModel* m, mjData* d);
 
   /// The per-step work (mjcb_control): maps the state once, detects the contact phase, advances
@@ -143,6 +173,12 @@ class HopperController {
   /// Where u^0 came from: "solved" (no law_cache), "loaded <file>", "stored <file>", or "solved;
   /// not stored: <why>"; a stored file that could not be used adds " (<file>: <why>)".
   const std::string& law_cache_status() const { return law_cache_status_; }
+  /// The stances' mass estimate (IdentificationSettings; kept whether or not it is acted on).
+  const MassIdentification& mass_identification() const { return mass_id_; }
+  /// The re-solves of u^0 on an identified model, in order (empty when identification is off).
+  const std::vector<ModelResolve>& resolves() const { return resolves_; }
+  /// The model the laws are computed on now (config().model until a re-solve took over).
+  const HopperParams& model_params() const { return model_.params(); }
   /// True when the law cache could not store u^0 or held a file it could not use.
   bool law_cache_trouble() const { return law_cache_trouble_; }
   /// Set when the controller caught an internal error (the message says what failed); it then
@@ -163,12 +199,12 @@ class HopperController {
 
   HopperController(const mjModel* m, const ControllerConfig& config);
   void Initialize();  // gait, u^0, driver; throws
-  // u^0 from config_.law_cache: true when loaded (sets fallback_, model_cost_, ...).
-  bool LoadInitialLaw();
-  // Stores the solved u^0 into config_.law_cache (when set); sets law_cache_status_.
-  void StoreInitialLaw();
-  // Notes that the stored law in `path` could not be used (solved instead).
-  void SetLawUnusable(const std::string& path, const std::string& why);
+  // A new driver of config_.driver on fallback_ (warm-up at least `warmup` trials).
+  void MakeDriver(int warmup);
+  // Offline side: the gait and u^0 of the model with M = mass, into staged_ (law cache first).
+  void ResolveModel(double mass);
+  // Simulation side, in flight: the staged model, gait and u^0 take over; a new driver.
+  void TakeOverResolvedModel();
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
   void Step(const mjData* d);
   // The touchdown at t with x^-(T1) = x.
@@ -193,7 +229,8 @@ class HopperController {
 
   ControllerConfig config_;
   HopperMapping map_;
-  HopperModel model_;
+  HopperModel model_;         // the model the laws are computed on (a re-solve replaces it)
+  HopperModel report_model_;  // config.model, kept: the reports' (42) stays comparable
   HopperCost cost_;         // the problem's cost (the offline part sets its reference)
   HopperCost report_cost_;  // the reports' I1..I4 (Compute), against the hop's own start
   Problem problem_;
@@ -206,9 +243,22 @@ class HopperController {
   double model_cost_ = 0.0;
   int model_iterations_ = 0;
   std::string law_cache_status_ = "solved";
-  std::string law_key_;       // InitialLawKey of config_ when law_cache is set
-  std::string law_unusable_;  // " (<file>: <why>)" when a stored law could not be used
   bool law_cache_trouble_ = false;
+  // Identification: the estimate (simulation side), the model's mass asked for (NaN: none), the
+  // re-solve the offline part staged, and the record.
+  MassIdentification mass_id_;
+  double resolve_request_ = std::numeric_limits<double>::quiet_NaN();
+  double job_resolve_ = std::numeric_limits<double>::quiet_NaN();  // the job's request
+  struct Staged {
+    bool ready = false;  // the offline part solved it; it takes over when due, in flight
+    HopperParams params;
+    NominalGait gait;
+    OnlineController law;
+    double cost = 0.0;
+    int iterations = 0;
+    ModelResolve record;  // resolves_ gets it on the simulation side (TakeOfflineResult)
+  } staged_;
+  std::vector<ModelResolve> resolves_;
   std::vector<Vector> pitch_scale_;  // PitchFeedbackExperiment: per mode, empty when off
 
   // Per-step state (Compute).

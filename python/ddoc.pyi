@@ -239,13 +239,15 @@ def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
                progress: Optional[Callable[[Dict[str, Any]], None]] = None,
                render_dir: str = "", width: int = 640, height: int = 480,
                fps: float = 60.0, law_cache: str = "",
-               substep_events: bool = False) -> Dict[str, Any]:
+               substep_events: bool = False,
+               identify: Optional[bool] = None) -> Dict[str, Any]:
     """Runs a ddoc-hopper scenario (built with the MuJoCo application only) with the command
     line's overrides (method, hops, seconds, robot, model_mjcf, pushes as (time, force, duration),
     (hop, phase, force, duration) or the --push strings, no_pushes, preset "default" | "paper",
-    offline_latency, log_every, law_cache, substep_events); progress(row) after every hop; PNG frames into
+    offline_latency, log_every, law_cache, substep_events, identify); progress(row) after every hop; PNG frames into
     render_dir when HAVE_RENDER. Returns the columns of hops.csv as NumPy arrays, 'trajectory'
-    (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law.
+    (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law,
+    resolves.
     Ctrl-C raises SolveInterrupted with the partial result; a controller failure or a
     non-finite MuJoCo state raises RunFailed with it; MuJoCo's warnings are RuntimeWarnings."""
     ...

@@ -67,6 +67,8 @@ const HopColumn kHopColumns[] = {
     {"optimality", false, [](const HopReport& h) { return h.optimality; }},
     {"stance_mass", false, [](const HopReport& h) { return h.stance_mass; }},
     {"reverted", true, [](const HopReport& h) { return h.reverted ? 1.0 : 0.0; }},
+    {"identified_mass", false, [](const HopReport& h) { return h.identified_mass; }},
+    {"model_mass", false, [](const HopReport& h) { return h.model_mass; }},
     {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
     {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
 };
@@ -175,8 +177,9 @@ void CheckOverrides(const app::RunOverrides& o) {
   if (!o.method.empty() && o.method != "alg1" && o.method != "ocfb" && o.method != "mrl") {
     throw py::value_error("method \"" + o.method + "\": expected alg1, ocfb or mrl");
   }
-  if (!o.preset.empty() && o.preset != "default" && o.preset != "paper") {
-    throw py::value_error("preset \"" + o.preset + "\": expected default or paper");
+  if (!o.preset.empty() && o.preset != "default" && o.preset != "paper" &&
+      o.preset != "identified") {
+    throw py::value_error("preset \"" + o.preset + "\": expected default, paper or identified");
   }
   if (o.hops && *o.hops < 0) {
     throw py::value_error("hops must be >= 0, got " + std::to_string(*o.hops));
@@ -231,9 +234,11 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    const py::iterable& pushes, bool no_pushes, const std::string& preset,
                    const py::object& offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
-                   int height, double fps, const std::string& law_cache, bool substep_events) {
+                   int height, double fps, const std::string& law_cache, bool substep_events,
+                   std::optional<bool> identify) {
   app::RunOverrides overrides;
   overrides.substep_events = substep_events;
+  overrides.identify = identify;
   overrides.method = method;
   overrides.hops = hops;
   overrides.seconds = seconds;
@@ -374,6 +379,17 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   out["sim_time"] = sim_time;
   out["frames"] = frame_count;
   out["initial_law"] = run.controller->law_cache_status();
+  py::list resolves;  // summary.json's identification.resolves
+  for (const plugin::ModelResolve& r : run.controller->resolves()) {
+    py::dict d;
+    d["hop"] = r.hop;
+    d["mass"] = r.mass;
+    d["took_over_hop"] = r.took_over_hop;
+    d["wall_ms"] = r.wall_ms;
+    d["initial_law"] = r.law_cache;
+    resolves.append(d);
+  }
+  out["resolves"] = resolves;
   if (!error.empty()) {
     py::object cls = py::module_::import("ddoc").attr("RunFailed");
     py::object exc = cls("run_hopper: " + error + " (after " +
@@ -419,7 +435,7 @@ class RunFailed(RuntimeError):
           py::arg("offline_latency") = py::none(), py::arg("log_every") = 1,
           py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
           py::arg("height") = 480, py::arg("fps") = 60.0, py::arg("law_cache") = "",
-          py::arg("substep_events") = false,
+          py::arg("substep_events") = false, py::arg("identify") = py::none(),
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
 The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
@@ -430,7 +446,7 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    (hop, phase, force, duration) by the phase of a hop, or the command line's
                    string 'TIME,FORCE,DURATION' / 'HOP@PHASE,FORCE,DURATION'
   no_pushes        drop the scenario's pushes (--no-pushes)
-  preset           "default" | "paper" (--preset)
+  preset           "default" | "paper" | "identified" (--preset)
   offline_latency  s, or "measured": max(0.02 s, this computer's offline time) (--offline-latency)
   log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
   progress         called after every hop with that hop's row (a dict of the table's columns);
@@ -440,14 +456,17 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    ddoc.HAVE_RENDER; otherwise a render_dir raises ValueError)
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
   substep_events   locate touchdown and takeoff inside the physics step (--substep-events)
+  identify         True/False: identify the mass and re-solve u^0 on it (--identify/--no-identify)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
-learner_cost, nominal_cost, predicted, optimality, stance_mass, reverted) and offline_ms, latency_ms (the
+learner_cost, nominal_cost, predicted, optimality, stance_mass, reverted, identified_mass,
+model_mass) and offline_ms, latency_ms (the
 wall time of the hop's offline part and the simulated latency of its law); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
-sim_time, frames (PNG files written) and initial_law (where u^0 came from, as summary.json's
-initial_law). ddoc.to_dataframe turns either table into a pandas
+sim_time, frames (PNG files written), initial_law (where u^0 came from, as summary.json's
+initial_law) and resolves (the re-solves of u^0 on an identified mass: hop, mass, took_over_hop,
+wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
 ddoc.SolveInterrupted with the partial result in .result; a controller failure or a non-finite
 MuJoCo state raises ddoc.RunFailed with it in .result; MuJoCo's warnings are RuntimeWarnings.)");

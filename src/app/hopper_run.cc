@@ -128,13 +128,22 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
   if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;
   if (s.substep_events) config.contact.substep_events = *s.substep_events;
+  if (s.identify_mass) config.identification.mass = *s.identify_mass;
+  if (s.settle_hops) config.identification.settle_hops = *s.settle_hops;
+  if (s.resolve_latency) config.identification.resolve_latency = *s.resolve_latency;
   return config;
 }
 
 void RunOverrides::Register(CLI::App* cli, bool full) {
   cli->add_option("--method,-m", method, "alg1 | ocfb | mrl (overrides the scenario)");
   cli->add_option("--preset", preset,
-                  "default | paper: the learner and the hopper's reading (overrides the scenario)");
+                  "default | paper | identified: the learner and the hopper's reading; identified "
+                  "= default with --identify (overrides the scenario)");
+  cli->add_flag_function(
+      "--identify,!--no-identify", [this](std::int64_t count) { identify = count > 0; },
+                "identify the robot's mass from the stances and re-solve u^0 on it when the "
+                "model's leaves the estimate's confidence region (<identification mass>; "
+                "overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
   cli->add_flag("--substep-events", substep_events,
                 "locate touchdown and takeoff inside the physics step for the measured durations "
@@ -216,10 +225,11 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   Scenario s = LoadScenario(path);
   if (!o.method.empty()) s.method = ParseMethod(o.method);
   if (!o.preset.empty()) {
-    if (o.preset != "default" && o.preset != "paper") {
-      throw ScenarioError("--preset \"" + o.preset + "\": expected default or paper");
+    if (o.preset != "default" && o.preset != "paper" && o.preset != "identified") {
+      throw ScenarioError("--preset \"" + o.preset + "\": expected default, paper or identified");
     }
     s.learning.paper = o.preset == "paper";
+    if (o.preset == "identified") s.identify_mass = true;
   }
   if (o.hops && *o.hops < 0) {
     throw ScenarioError("--hops must be >= 0, got " + std::to_string(*o.hops));
@@ -237,6 +247,7 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
     s.model_numbers = ModelNumbers();
   }
   if (o.substep_events) s.substep_events = true;
+  if (o.identify) s.identify_mass = *o.identify;
   if (o.no_pushes) {
     s.pushes.clear();
     s.hop_pushes.clear();

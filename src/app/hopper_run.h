@@ -82,7 +82,10 @@ struct RunOverrides {
   std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
   /// --offline-latency measured: ControllerConfig::measured_latency (the floor stays 0.02 s).
   bool measured_latency = false;
-  std::string preset;                    ///< --preset default | paper (overrides the scenario)
+  /// --preset default | paper | identified (default with --identify; overrides the scenario)
+  std::string preset;
+  /// --identify / --no-identify: IdentificationSettings::mass (overrides the scenario and preset)
+  std::optional<bool> identify;
   /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE (set
   /// and empty: off), then, when `user_law_cache`, DefaultLawCacheDir(), else off.
   std::string law_cache;

@@ -200,6 +200,7 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
       progress_(!o.quiet && isatty(STDERR_FILENO)) {
   summary_ = ScenarioSummary(*run);
   summary_.initial_law = run->controller->law_cache_status();
+  summary_.identify_mass = run->config.identification.mass;
   // A law cache that could not be written, or held a file it could not use, is worth a line.
   if (run->controller->law_cache_trouble()) {
     std::fprintf(stderr, "ddoc-hopper: warning: law cache: %s (the run goes on)\n",
@@ -340,6 +341,7 @@ void HopperRun::LogHops() {
     pending_.pop_front();
     log_->WriteHop(h);
     summary_.AddHop(h, learns);
+    summary_.resolves = run_->controller->resolves();
     const Eigen::Vector4d& td = h.body_touchdown;
     const Eigen::Vector4d& to = h.body_takeoff;
     log_->WriteEvent({h.t_touchdown, h.hop, "touchdown", td(0), td(1), td(2), td(3)});

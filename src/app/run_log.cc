@@ -51,6 +51,8 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   const int n = counted_;
   mean_speed = speed_sum_ / n;
   mean_period = period_sum_ / n;
+  identified_mass = h.identified_mass;
+  model_mass = h.model_mass;
   if (std::isfinite(h.stance_mass)) {
     stance_mass_sum_ += h.stance_mass;
     mean_stance_mass = stance_mass_sum_ / ++stance_mass_hops_;
@@ -79,7 +81,7 @@ RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(
   events_ = OpenOrThrow(dir_ + "/events.csv");
   std::fputs("hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,"
              "du2,dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-             "optimality,stance_mass,reverted\n", hops_);
+             "optimality,stance_mass,reverted,identified_mass,model_mass\n", hops_);
   std::fputs("t,hop,phase,x,y,theta,phi,r,k_hip,k_leg,xd,yd,thetad,phid,rd,kd_hip,kd_leg,"
              "tau0,F0,k0_hip,k0_leg,push\n", trajectory_);
   std::fputs("t,hop,type,x,y,xd,yd\n", events_);
@@ -102,12 +104,12 @@ void RunLog::WriteHop(const plugin::HopReport& h) {
   errno = 0;
   const int n = std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
-               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f,%d\n",
+               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f,%d,%.6f,%.6f\n",
                h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
                h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
                h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0,
                h.remeasured ? 1 : 0, h.learner_cost, h.nominal_cost, h.predicted, h.optimality,
-               h.stance_mass, h.reverted ? 1 : 0);
+               h.stance_mass, h.reverted ? 1 : 0, h.identified_mass, h.model_mass);
   Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 
@@ -161,6 +163,18 @@ void RunLog::WriteSummary(const Summary& s) {
   j["mean_speed"] = s.mean_speed;
   j["mean_period"] = s.mean_period;
   j["mean_stance_mass"] = s.mean_stance_mass;  // null when no hop had a stance_mass
+  j["identification"] = {{"mass", s.identify_mass},
+                         {"identified_mass", s.identified_mass},
+                         {"model_mass", s.model_mass},
+                         {"resolves", nlohmann::json::array()}};
+  for (const plugin::ModelResolve& r : s.resolves) {
+    j["identification"]["resolves"].push_back(
+        {{"hop", r.hop},
+         {"mass", r.mass},
+         {"took_over_hop", HopOrNull(r.took_over_hop)},
+         {"wall_ms", r.wall_ms},
+         {"initial_law", r.law_cache}});
+  }
   j["accepted"] = s.accepted;
   j["restarts"] = s.restarts;
   j["remeasured"] = s.remeasured;

@@ -62,6 +62,11 @@ struct Summary {
   double final_cost = std::nan(""), final_i4 = std::nan(""), mean_speed = std::nan(""),
          mean_period = std::nan("");
   double mean_stance_mass = std::nan("");  // kg, over the hops with a stance_mass; NaN: none
+  // summary.json "identification": IdentificationSettings::mass of the run, the last hop's
+  // estimate and model M (kg), and the re-solves of u^0 (HopperController::resolves()).
+  bool identify_mass = false;
+  double identified_mass = std::nan(""), model_mass = std::nan("");
+  std::vector<plugin::ModelResolve> resolves;
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;
   /// Learning trials (hops run with alpha > 0, the ones (36) judges) accepted / rejected: the

@@ -110,6 +110,7 @@ const std::vector<ElementSpec>& Elements() {
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"contact", false, {Text("substep_events")}},
+      {"identification", false, {Text("mass"), Integer("settle_hops", 0), Number("resolve_latency", kNonNegative)}},
       {"gait", false,
        {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
         Number("k0_leg", Closed(lo(hopper::kK0leg), hi(hopper::kK0leg)))}},
@@ -353,6 +354,10 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
     s->experiment.from_hop = GetInteger(path, e, "from_hop");
   } else if (tag == "contact") {
     if (auto v = GetChoice(path, e, "substep_events", "off", "on")) s->substep_events = *v == "on";
+  } else if (tag == "identification") {
+    if (auto v = GetChoice(path, e, "mass", "off", "on")) s->identify_mass = *v == "on";
+    s->settle_hops = GetInteger(path, e, "settle_hops");
+    s->resolve_latency = GetNumber(path, e, "resolve_latency");
   } else if (tag == "gait") {
     s->forward_speed = GetNumber(path, e, "speed").value_or(0.0);
     s->gait_k0_hip = GetNumber(path, e, "k0_hip");
@@ -370,7 +375,7 @@ void ParseChildren(const std::string& path, const Element* root, Scenario* s) {
     if (spec == nullptr) {
       Fail(path, e->GetLineNum(),
            "unknown element <" + tag + "> (expected robot, model, method, duration, push, "
-           "learning, experiment, contact or gait)");
+           "learning, experiment, contact, identification or gait)");
     }
     for (const auto& [name, line] : seen) {
       if (name == tag && !spec->repeatable) {

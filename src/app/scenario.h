@@ -109,6 +109,11 @@ struct Scenario {
   ExperimentOverrides experiment;    // <experiment .../>
   // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
   std::optional<bool> substep_events;
+  // <identification mass="on|off" settle_hops="N" resolve_latency="S"/>: IdentificationSettings
+  // (unset: off, 2, 2 s)
+  std::optional<bool> identify_mass;
+  std::optional<int> settle_hops;
+  std::optional<double> resolve_latency;
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.

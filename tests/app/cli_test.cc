@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #ifdef DDOC_TEST_RENDER
 #include "ddoc/render/png.h"
 #endif
@@ -238,6 +240,38 @@ TEST_F(CliTest, VideoWithoutRenderWritesNoPngFiles) {
 // Motor strength: hip_gain/leg_gain turn a <motor> into the <general> it stands for with gainprm
 // scaled. At 1 the run is the plain robot's, byte for byte (the conversion changes nothing);
 // a hip at 80 % changes the hops, and the controller (which checks the gear) still runs.
+// --identify (and --preset identified): the 8 kg robot's mass is identified from the first two
+// stances and u^0 re-solved on it; summary.json and hops.csv say so; --no-identify is the plain
+// run; a bad preset is named.
+TEST_F(CliTest, IdentifyReSolvesOnTheRobotsMass) {
+  const std::string run = Scenario("default.xml") + " --hops 8 -q --method ocfb";
+  const Result plain = RunCli(run + " --out " + Out("plain"));
+  ASSERT_EQ(plain.code, 0) << plain.output;
+  const Result off = RunCli(run + " --out " + Out("off") + " --preset identified --no-identify");
+  ASSERT_EQ(off.code, 0) << off.output;
+  EXPECT_EQ(ReadFile(dir_ / "off" / "hops.csv"), ReadFile(dir_ / "plain" / "hops.csv"));
+  for (const char* flags : {" --identify", " --preset identified"}) {
+    SCOPED_TRACE(flags);
+    const Result on = RunCli(run + " --out " + Out("on") + flags);
+    ASSERT_EQ(on.code, 0) << on.output;
+    const nlohmann::json s = nlohmann::json::parse(ReadFile(dir_ / "on" / "summary.json"));
+    const nlohmann::json& id = s["identification"];
+    EXPECT_TRUE(id["mass"].get<bool>());
+    ASSERT_EQ(id["resolves"].size(), 1u) << id.dump();
+    EXPECT_LE(id["resolves"][0]["hop"].get<int>(), 2);
+    EXPECT_NEAR(id["resolves"][0]["mass"].get<double>(), 8.001, 0.01);
+    EXPECT_NEAR(id["model_mass"].get<double>(), 8.001, 0.01);
+    const std::string hops = ReadFile(dir_ / "on" / "hops.csv");
+    EXPECT_NE(hops.find("identified_mass,model_mass\n"), std::string::npos);
+    EXPECT_NE(hops.find(",10.000000\n"), std::string::npos) << "hop 0 ran the 10 kg model";
+    EXPECT_NE(hops.find(",8.001000\n"), std::string::npos) << "the last hop the identified one";
+  }
+  const Result bad = RunCli(run + " --out " + Out("bad") + " --preset fast");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("expected default, paper or identified"), std::string::npos)
+      << bad.output;
+}
+
 TEST_F(CliTest, MotorStrengthVariantsScaleWhatTheMotorsDeliver) {
   const std::string run = Scenario("default.xml") + " --hops 2 -q --method ocfb";
   const Result plain = RunCli(run + " --out " + Out("plain"));

@@ -29,7 +29,8 @@ FORMATS = [("hop", "%d"), ("t_start", "%.6f"), ("t_end", "%.6f"), ("cost", "%.9g
            ("alpha", "%.6g"), ("accepted", "%d"), ("du2", "%.9g"), ("dT2", "%.9g"),
            ("start_shift", "%.9g"), ("restarted", "%d"), ("remeasured", "%d"),
            ("learner_cost", "%.9g"), ("nominal_cost", "%.9g"), ("predicted", "%.9g"),
-           ("optimality", "%.9g"), ("stance_mass", "%.6f"), ("reverted", "%d")]
+           ("optimality", "%.9g"), ("stance_mass", "%.6f"), ("reverted", "%d"),
+           ("identified_mass", "%.6f"), ("model_mass", "%.6f")]
 
 
 # trajectory.csv's columns and formats (RunLog::WriteSample): t, hop, phase, 14 coordinates and
@@ -116,6 +117,25 @@ def test_run_hopper_substep_events():
     assert np.all(np.abs(inside["T1"] / 0.0005 - np.round(inside["T1"] / 0.0005)) > 1e-3)
 
 
+def test_run_hopper_identify():
+    # identify=True (--identify): u^0 is solved again on the 8 kg robot's mass after the second
+    # stance; the model_mass column says from which hop on; identify=False is the plain run.
+    kw = dict(method="ocfb", hops=8, log_every=0)
+    plain = ddoc.run_hopper(SCENARIO, **kw)
+    off = ddoc.run_hopper(SCENARIO, identify=False, preset="identified", **kw)
+    on = ddoc.run_hopper(SCENARIO, identify=True, **kw)
+    np.testing.assert_array_equal(plain["cost"], off["cost"])
+    assert plain["resolves"] == [] and off["resolves"] == []
+    assert len(on["resolves"]) == 1
+    r = on["resolves"][0]
+    assert r["hop"] <= 2 and abs(r["mass"] - 8.001) < 0.01
+    took_over = r["took_over_hop"]
+    assert 0 < took_over < 8
+    np.testing.assert_array_equal(on["model_mass"][:took_over], 10.0)
+    np.testing.assert_array_equal(on["model_mass"][took_over:], r["mass"])
+    np.testing.assert_allclose(on["identified_mass"], 8.001, atol=0.01)
+
+
 def test_run_hopper_log_every():
     every = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1)["trajectory"]
     tenth = ddoc.run_hopper(SCENARIO, method="ocfb", hops=1, log_every=10)["trajectory"]
@@ -129,7 +149,8 @@ def test_run_hopper_progress_rows_and_exception():
     assert [r["hop"] for r in rows] == [0, 1, 2]
     for i, row in enumerate(rows):
         assert set(row) == {name for name in table if name not in (
-            "trajectory", "method", "fell", "fall_reason", "sim_time", "frames", "initial_law")}
+            "trajectory", "method", "fell", "fall_reason", "sim_time", "frames", "initial_law",
+            "resolves")}
         for name, value in row.items():
             assert value == table[name][i], (i, name)
 
@@ -166,7 +187,7 @@ def test_run_hopper_render(tmp_path):
 def test_run_hopper_bad_input():
     with pytest.raises(ValueError, match="method"):
         ddoc.run_hopper(SCENARIO, method="bogus", hops=1)
-    with pytest.raises(ValueError, match="preset \"bogus\": expected default or paper"):
+    with pytest.raises(ValueError, match="preset \"bogus\": expected default, paper or identified"):
         ddoc.run_hopper(SCENARIO, preset="bogus", hops=1)
     with pytest.raises(ValueError, match=r"pushes\[1\]: expected \(time, force, duration\) or "
                        r"\(hop, phase, force, duration\), got a sequence of length 2"):

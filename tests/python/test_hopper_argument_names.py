@@ -24,7 +24,7 @@ CASES = [
     (dict(seconds=math.nan), r"^seconds must be a finite number >= 0, got nan$"),
     (dict(seconds=math.inf, hops=1), r"^seconds must be a finite number >= 0, got inf$"),
     (dict(method="bogus", hops=1), r'^method "bogus": expected alg1, ocfb or mrl$'),
-    (dict(preset="fast", hops=1), r'^preset "fast": expected default or paper$'),
+    (dict(preset="fast", hops=1), r'^preset "fast": expected default, paper or identified$'),
     (dict(offline_latency=-0.01, hops=1),
      r"^offline_latency must be a finite number >= 0 \(s\), got -0\.01$"),
     (dict(offline_latency=math.nan, hops=1),
