@@ -59,8 +59,8 @@ struct IdentificationSettings {
   int settle_hops = 2;
   /// Simulated s from the identifying hop's end until the re-solved u^0 may take over (the
   /// offline part solves the gait and u^0 meanwhile; with measured_latency at least its wall
-  /// time), >= 0; default 2 s. ModelResolve::wall_ms says what this computer took.
-  double resolve_latency = 2.0;
+  /// time), >= 0; default 1 s (a law-cache load). ModelResolve::wall_ms says what this computer took.
+  double resolve_latency = 1.0;
 
   static MassIdentification::Settings DefaultEstimator() {
     MassIdentification::Settings s;

@@ -110,7 +110,7 @@ struct Scenario {
   // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
   std::optional<bool> substep_events;
   // <identification mass="on|off" settle_hops="N" resolve_latency="S"/>: IdentificationSettings
-  // (unset: off, 2, 2 s)
+  // (unset: off, 2, 1 s)
   std::optional<bool> identify_mass;
   std::optional<int> settle_hops;
   std::optional<double> resolve_latency;

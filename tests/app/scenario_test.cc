@@ -235,7 +235,7 @@ TEST_F(ScenarioTest, Identification) {
   plugin::ControllerConfig c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
   EXPECT_FALSE(c.identification.mass);  // the default: off
   EXPECT_EQ(c.identification.settle_hops, 2);
-  EXPECT_EQ(c.identification.resolve_latency, 2.0);
+  EXPECT_EQ(c.identification.resolve_latency, 1.0);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "mass='on' settle_hops='0' resolve_latency='0.5'"))),
       HopperParams());
