@@ -159,5 +159,30 @@ TEST(ControllerIdentificationTest, SynchronousLearningTakesOverAtTheTakeoff) {
   EXPECT_GT(reports[r.took_over_hop + 3].alpha, 0.0);
 }
 
+// Bad identification settings fail Create, naming the field and the bound.
+TEST(ControllerIdentificationTest, BadSettingsAreNamed) {
+  MjModelPtr m = LoadMjcf(std::string(DDOC_MODELS_DIR) + "/hopper_m8.xml");
+  struct Case {
+    void (*set)(IdentificationSettings*);
+    const char* message;
+  };
+  const Case cases[] = {
+      {[](IdentificationSettings* s) { s->settle_hops = -1; },
+       "config.identification.settle_hops = -1, expected >= 0"},
+      {[](IdentificationSettings* s) { s->mass_resolution = 0.0; },
+       "config.identification.mass_resolution = 0, expected finite and > 0"},
+      {[](IdentificationSettings* s) { s->resolve_latency = std::nan(""); },
+       "config.identification.resolve_latency = nan, expected finite and >= 0"},
+      {[](IdentificationSettings* s) { s->estimator.z = -1.0; }, "MassIdentification: z = -1"},
+  };
+  for (const Case& c : cases) {
+    ControllerConfig config;
+    c.set(&config.identification);
+    std::string error;
+    EXPECT_EQ(HopperController::Create(m.get(), config, &error), nullptr);
+    EXPECT_NE(error.find(c.message), std::string::npos) << error;
+  }
+}
+
 }  // namespace
 }  // namespace ddoc::plugin
