@@ -79,17 +79,17 @@ class GridTest(unittest.TestCase):
         self.assertEqual([c[1] for c in rm.shard_cases(full, (1, 4))][:2], [full[1][1], full[5][1]])
 
     def test_the_unmodelled_grid(self):
-        # Issue 44: 2 robots x 6 kinds x 5 levels = 60 conditions, every method.
+        # Issue 44: 2 robots x 6 kinds x 8 levels = 96 conditions, every method.
         cases = rm.cases(self.grid("--maps", "unmodelled"))
         names = [n for _, n, _ in cases]
-        self.assertEqual(len(names), 2 * 6 * 5 * 3)
+        self.assertEqual(len(names), 2 * 6 * 8 * 3)
         self.assertEqual(len(set(names)), len(names))
-        self.assertEqual(names[:4], ["unmod_m12_b_leg0.5_alg1", "unmod_m12_b_leg0.5_ocfb",
-                                     "unmod_m12_b_leg0.5_mrl", "unmod_m12_b_leg1_alg1"])
+        self.assertEqual(names[:4], ["unmod_m12_b_leg0.25_alg1", "unmod_m12_b_leg0.25_ocfb",
+                                     "unmod_m12_b_leg0.25_mrl", "unmod_m12_b_leg0.5_alg1"])
         self.assertIn("unmod_m8_contact0.05_mrl", names)
         variants = {rm.robot_variant(k["kind"], k["level"]) for _, _, k in cases}
         for v in ("b_leg=5.5", "b_hip=0.1", "slope=0.08", "slope=-0.005",
-                  "hip_gain=0.4,leg_gain=0.4", "contact_timeconst=0.002"):
+                  "hip_gain=0.4,leg_gain=0.4", "contact_timeconst=0.0015"):
             self.assertIn(v, variants)
 
     def test_identification_is_an_axis_before_the_method(self):
@@ -196,6 +196,25 @@ class SummaryTest(TempDirTest):
         for method in ("alg1", "ocfb", "mrl"):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"unmodelled_{method}.png")))
+
+    def test_a_map_written_before_the_identification_column_reads_as_off(self):
+        grid = self.grid()
+        rows = {}
+        for _, name, keys in rm.cases(grid):
+            rows[name] = {c: "" for c in rm.csv_columns("mass")}
+            rows[name].update(case=name, mass=rm.dr.label(keys["mass"]), c_d="0", speed="0.5",
+                              method=keys["method"], exit="0", hops="100", survived="1",
+                              cost_last10="1.0", cost_last10_sd="0.1", identification="off")
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        path = os.path.join(self.tmp, "mass_map.csv")
+        with open(path) as f:
+            old = [line.rsplit(",", 1)[0] for line in f.read().splitlines()]
+        self.assertEqual(old[0].split(",")[-1], "stance_mass")
+        with open(path, "w") as f:
+            f.write("\n".join(old) + "\n")
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            self.assertIn("| alg1 | 4/4 |", f.read())
 
     def test_z_score(self):
         def row(cost, sd, hops="100"):
