@@ -357,7 +357,8 @@ TEST_F(CliTest, UnmodelledDynamicsVariantsEqualTheirFiles) {
                             " --robot-variant b_leg=0,b_hip=0,slope=0,contact_timeconst=0.001");
   EXPECT_EQ(own.code, plain.code) << own.output;
   EXPECT_EQ(ReadFile(dir_ / "own" / "hops.csv"), ReadFile(dir_ / "m8" / "hops.csv"));
-  const Result soft = RunCli(run + " --out " + Out("soft") + " --robot-variant contact_timeconst=0.01");
+  const Result soft =
+      RunCli(run + " --out " + Out("soft") + " --robot-variant contact_timeconst=0.01");
   EXPECT_TRUE(soft.code == 0 || soft.code == 3) << soft.output;
   EXPECT_NE(ReadFile(dir_ / "soft" / "hops.csv"), ReadFile(dir_ / "m8" / "hops.csv"));
 }

@@ -191,8 +191,8 @@ class SummaryTest(TempDirTest):
         self.assertIn("both survive 2 of 3 conditions; Alg1's last-10 cost <= OC-FB's in 1 of "
                       "those 2", text)
         self.assertIn("geometric mean of the cost ratio 1.095, worst 1.500 (8 kg, gain 0.9)", text)
-        self.assertIn("| 8 | gain | 0.9 | `hip_gain=0.9,leg_gain=0.9` | 100, 3 | 100, 2 | fell @9 |",
-                      text)
+        self.assertIn("| 8 | gain | 0.9 | `hip_gain=0.9,leg_gain=0.9` | 100, 3 | 100, 2 | "
+                      "fell @9 |", text)
         for method in ("alg1", "ocfb", "mrl"):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"unmodelled_{method}.png")))
