@@ -142,6 +142,99 @@ void SetNumeric(tinyxml2::XMLElement* root, const std::string& path, const char*
                            "\"> to set");
 }
 
+// Sets the damping of the <joint name="name">.
+void SetJointDamping(tinyxml2::XMLElement* root, const std::string& path, const char* name,
+                     double damping) {
+  tinyxml2::XMLElement* joint = FindNamed(root, "joint", name);
+  if (joint == nullptr) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <joint name=\"" + name +
+                             "\"> to set the damping of");
+  }
+  joint->SetAttribute("damping", Number(damping).c_str());
+}
+
+// The <geom name="floor">, or an error naming what the variant needs it for.
+tinyxml2::XMLElement* Floor(tinyxml2::XMLElement* root, const std::string& path, const char* why) {
+  tinyxml2::XMLElement* floor = FindNamed(root, "geom", "floor");
+  if (floor == nullptr) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <geom name=\"floor\"> to set " +
+                             why);
+  }
+  return floor;
+}
+
+// The floor turned about -y by alpha = -slope (a positive angle counter-clockwise seen with x
+// right and z up, as the hinges), moved out by the foot radius along its normal so that the foot
+// centre touches on the line z = x tan(alpha) through the origin (HopperParams::slope's
+// switching surface): pos = radius (sin alpha, 0, -cos alpha). The flat floor is this at 0.
+void SetSlope(tinyxml2::XMLElement* root, const std::string& path, double slope) {
+  tinyxml2::XMLElement* floor = Floor(root, path, "the slope of");
+  tinyxml2::XMLElement* foot = FindNamed(root, "geom", "foot");
+  const char* size = foot != nullptr ? foot->Attribute("size") : nullptr;
+  const double radius = size != nullptr ? std::strtod(size, nullptr) : 0.0;
+  if (!(radius > 0.0)) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <geom name=\"foot\" size=...> "
+                             "(the foot radius places the sloped floor)");
+  }
+  const double alpha = -slope;
+  const std::string pos = Number(radius * std::sin(alpha)) + " 0 " +
+                          Number(-radius * std::cos(alpha));
+  floor->SetAttribute("pos", pos.c_str());
+  for (const char* other : {"quat", "euler", "xyaxes", "zaxis", "axisangle"}) {
+    floor->DeleteAttribute(other);
+  }
+  if (alpha != 0.0) {
+    floor->SetAttribute("axisangle", ("0 -1 0 " + Number(alpha)).c_str());
+  }
+}
+
+// Replaces solref[0] (the time constant) of `e`, keeping the damping ratio (MuJoCo's default
+// "0.02 1" when `e` has none).
+void SetTimeConstant(tinyxml2::XMLElement* e, double timeconst) {
+  std::istringstream in(e->Attribute("solref") ? e->Attribute("solref") : "0.02 1");
+  double old = 0.0, ratio = 1.0;
+  in >> old >> ratio;
+  e->SetAttribute("solref", (Number(timeconst) + " " + Number(ratio)).c_str());
+}
+
+// The foot-floor contact's time constant: solref of the floor, of the foot's default class and
+// of the foot geom when it has its own (MuJoCo mixes the two geoms' solref; both get it).
+void SetContactTimeConstant(tinyxml2::XMLElement* root, const std::string& path,
+                            double timeconst) {
+  double timestep = 0.002;  // MuJoCo's default
+  if (tinyxml2::XMLElement* option = root->FirstChildElement("option")) {
+    option->QueryDoubleAttribute("timestep", &timestep);
+  }
+  if (!(timeconst >= 2.0 * timestep)) {
+    throw std::runtime_error("--robot-variant: contact_timeconst=" + Number(timeconst) +
+                             ", expected >= 2 x timestep = " + Number(2.0 * timestep) +
+                             " s (MuJoCo's smallest contact time constant; robot MJCF '" + path +
+                             "' has timestep " + Number(timestep) + " s)");
+  }
+  SetTimeConstant(Floor(root, path, "the contact time constant of"), timeconst);
+  tinyxml2::XMLElement* foot = FindNamed(root, "geom", "foot");
+  if (foot == nullptr) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <geom name=\"foot\"> to set the "
+                             "contact time constant of");
+  }
+  if (foot->Attribute("solref") != nullptr) SetTimeConstant(foot, timeconst);
+  const char* cls = foot->Attribute("class");
+  if (cls != nullptr) {
+    // <default class="CLS"><geom solref=.../></default>
+    auto find_class = [&](auto&& self, tinyxml2::XMLElement* e) -> tinyxml2::XMLElement* {
+      for (tinyxml2::XMLElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) {
+        const char* n = c->Attribute("class");
+        if (std::string(c->Name()) == "default" && n != nullptr && std::string(n) == cls) return c;
+        if (tinyxml2::XMLElement* found = self(self, c)) return found;
+      }
+      return nullptr;
+    };
+    tinyxml2::XMLElement* def = find_class(find_class, root);
+    tinyxml2::XMLElement* geom = def ? def->FirstChildElement("geom") : nullptr;
+    if (geom != nullptr) SetTimeConstant(geom, timeconst);
+  }
+}
+
 }  // namespace
 
 std::string RobotVariant::ToString() const {
@@ -157,13 +250,18 @@ std::string RobotVariant::ToString() const {
   add("beta", beta);
   add("hip_gain", hip_gain);
   add("leg_gain", leg_gain);
+  add("b_leg", b_leg);
+  add("b_hip", b_hip);
+  add("slope", slope);
+  add("contact_timeconst", contact_timeconst);
   return out;
 }
 
 RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag) {
   RobotVariant v;
   auto fail = [&](const std::string& what) { throw std::invalid_argument(flag + ": " + what); };
-  const std::string keys = "mass, j_body, c_d, beta, hip_gain or leg_gain";
+  const std::string keys =
+      "mass, j_body, c_d, beta, hip_gain, leg_gain, b_leg, b_hip, slope or contact_timeconst";
   if (text.empty()) fail("empty; expected KEY=VALUE,... with keys " + keys);
   std::istringstream in(text);
   for (std::string item; std::getline(in, item, ',');) {
@@ -181,11 +279,23 @@ RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag)
                                    : key == "beta"   ? &v.beta
                                    : key == "hip_gain" ? &v.hip_gain
                                    : key == "leg_gain" ? &v.leg_gain
-                                                     : nullptr;
+                                   : key == "b_leg"    ? &v.b_leg
+                                   : key == "b_hip"    ? &v.b_hip
+                                   : key == "slope"    ? &v.slope
+                                   : key == "contact_timeconst" ? &v.contact_timeconst
+                                                                : nullptr;
     if (field == nullptr) fail("unknown key \"" + key + "\"; expected " + keys);
     if (*field) fail(key + " given twice");
-    const bool ok = key == "c_d" ? x >= 0 : x > 0;
-    if (!ok) fail(key + "=" + value + ", expected " + (key == "c_d" ? ">= 0" : "> 0"));
+    const bool non_negative = key == "c_d" || key == "b_leg" || key == "b_hip";
+    if (key == "slope") {
+      if (!(std::abs(x) < RobotVariant::kMaxSlope)) {
+        fail(key + "=" + value + ", expected |slope| < " + Number(RobotVariant::kMaxSlope) +
+             " rad");
+      }
+    } else if (!(non_negative ? x >= 0 : x > 0)) {
+      fail(key + "=" + value + ", expected " + (non_negative ? ">= 0" : "> 0") +
+           (key == "contact_timeconst" ? " s (and >= 2 x the robot's timestep)" : ""));
+    }
     *field = x;
   }
   return v;
@@ -245,6 +355,10 @@ std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant
   if (variant.beta) SetNumeric(root, path, "vsa_beta", *variant.beta);
   if (variant.hip_gain) ScaleGain(root, path, "hip_motor", *variant.hip_gain);
   if (variant.leg_gain) ScaleGain(root, path, "leg_motor", *variant.leg_gain);
+  if (variant.b_leg) SetJointDamping(root, path, "leg", *variant.b_leg);
+  if (variant.b_hip) SetJointDamping(root, path, "hip", *variant.b_hip);
+  if (variant.slope) SetSlope(root, path, *variant.slope);
+  if (variant.contact_timeconst) SetContactTimeConstant(root, path, *variant.contact_timeconst);
   tinyxml2::XMLPrinter printer;
   doc.Print(&printer);
   return printer.CStr();

@@ -78,6 +78,41 @@ class GridTest(unittest.TestCase):
         self.assertEqual(rm.shard_cases(full, (1, 4)), rm.shard_cases(rm.cases(self.grid()), (1, 4)))
         self.assertEqual([c[1] for c in rm.shard_cases(full, (1, 4))][:2], [full[1][1], full[5][1]])
 
+    def test_the_unmodelled_grid(self):
+        # Issue 44: 2 robots x 6 kinds x 8 levels = 96 conditions, every method.
+        cases = rm.cases(self.grid("--maps", "unmodelled"))
+        names = [n for _, n, _ in cases]
+        self.assertEqual(len(names), 2 * 6 * 8 * 3)
+        self.assertEqual(len(set(names)), len(names))
+        self.assertEqual(names[:4], ["unmod_m12_b_leg0.25_alg1", "unmod_m12_b_leg0.25_ocfb",
+                                     "unmod_m12_b_leg0.25_mrl", "unmod_m12_b_leg0.5_alg1"])
+        self.assertIn("unmod_m8_contact0.05_mrl", names)
+        variants = {rm.robot_variant(k["kind"], k["level"]) for _, _, k in cases}
+        for v in ("b_leg=5.5", "b_hip=0.1", "slope=0.08", "slope=-0.005",
+                  "hip_gain=0.4,leg_gain=0.4", "contact_timeconst=0.0015"):
+            self.assertIn(v, variants)
+
+    def test_identification_is_an_axis_before_the_method(self):
+        # Left at its default (off), the cases, their order and the manifest's grid are those of
+        # issue 19; `on` adds a case with _id_ before each method's, next to its `off` twin.
+        for maps in ("mass", "push", "unmodelled"):
+            with self.subTest(maps=maps):
+                plain = rm.cases(self.grid("--maps", maps))
+                off = rm.cases(self.grid("--maps", maps, "--identification", "off"))
+                both = rm.cases(self.grid("--maps", maps, "--identification", "on,off"))
+                self.assertEqual([n for _, n, _ in off], [n for _, n, _ in plain])
+                self.assertNotIn("identification", self.grid("--maps", maps))
+                self.assertEqual(len(both), 2 * len(plain))
+                self.assertEqual([n for _, n, k in both if k["identification"] == "off"],
+                                 [n for _, n, _ in plain])
+                stem = plain[0][1][:-len("_alg1")]
+                self.assertEqual([n for _, n, _ in both[:6]],
+                                 [f"{stem}_{m}" for m in ("alg1", "ocfb", "mrl")] +
+                                 [f"{stem}_id_{m}" for m in ("alg1", "ocfb", "mrl")])
+        self.assertEqual(rm.csv_columns("mass")[-1], "identification")
+        self.assertEqual(rm.csv_columns("push")[-2:], ("hops_to_recover", "identification"))
+        self.assertEqual(rm.csv_columns("mass")[:5], ("case", "mass", "c_d", "speed", "method"))
+
     def test_negative_forces_need_no_equals_sign(self):
         g = self.grid("--forces", "-40,-10,30")
         self.assertEqual(g["push"]["forces"], [-40.0, -10.0, 30.0])
@@ -124,6 +159,62 @@ class SummaryTest(TempDirTest):
         for method in ("alg1", "ocfb", "mrl"):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"mass_{method}.png")))
+
+    def test_unmodelled_counts(self):
+        # 8 kg robot, kinds b_leg (levels 1, 4) and gain (0.9): alg1 survives all three, ocfb
+        # all but b_leg 4, mrl none. Both survive: b_leg 1 (2.0 / 2.5 = 0.8) and gain 0.9
+        # (3.0 / 2.0 = 1.5): geometric mean sqrt(0.8 * 1.5) = 1.095, worst 1.5.
+        grid = rm.grid_from_args(rm.run_parser().parse_args(
+            ["--maps", "unmodelled", "--robots", "8", "--kinds", "b_leg,gain", "--b-legs", "1,4",
+             "--gains", "0.9"]))
+        costs = {("b_leg", 1.0): (2.0, 2.5), ("b_leg", 4.0): (2.2, None),
+                 ("gain", 0.9): (3.0, 2.0)}
+        rows = {}
+        for _, name, keys in rm.cases(grid):
+            a, o = costs[(keys["kind"], keys["level"])]
+            cost = {"alg1": a, "ocfb": o, "mrl": None}[keys["method"]]
+            rows[name] = {c: "" for c in rm.csv_columns("unmodelled")}
+            rows[name].update(case=name, robot_mass="8", kind=keys["kind"],
+                              level=rm.dr.label(keys["level"]), method=keys["method"],
+                              exit="0" if cost else "3", hops="100" if cost else "9",
+                              survived="1" if cost else "0", fall_hop="" if cost else "9",
+                              cost_last10="" if cost is None else repr(cost),
+                              cost_last10_sd="" if cost is None else "0.1",
+                              identification="off")
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            text = f.read()
+        self.assertIn("| 8 | b_leg | 1, 4 | 2/2 | 1/2 | 0/2 |", text)
+        self.assertIn("| 8 | gain | 0.9 | 1/1 | 1/1 | 0/1 |", text)
+        self.assertIn("| all | | | 3/3 | 2/3 | 0/3 |", text)
+        self.assertIn("both survive 2 of 3 conditions; Alg1's last-10 cost <= OC-FB's in 1 of "
+                      "those 2", text)
+        self.assertIn("geometric mean of the cost ratio 1.095, worst 1.500 (8 kg, gain 0.9)", text)
+        self.assertIn("| 8 | gain | 0.9 | `hip_gain=0.9,leg_gain=0.9` | 100, 3 | 100, 2 | "
+                      "fell @9 |", text)
+        for method in ("alg1", "ocfb", "mrl"):
+            self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
+                                                        f"unmodelled_{method}.png")))
+
+    def test_a_map_written_before_the_identification_column_reads_as_off(self):
+        grid = self.grid()
+        rows = {}
+        for _, name, keys in rm.cases(grid):
+            rows[name] = {c: "" for c in rm.csv_columns("mass")}
+            rows[name].update(case=name, mass=rm.dr.label(keys["mass"]), c_d="0", speed="0.5",
+                              method=keys["method"], exit="0", hops="100", survived="1",
+                              cost_last10="1.0", cost_last10_sd="0.1", identification="off")
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        path = os.path.join(self.tmp, "mass_map.csv")
+        with open(path) as f:
+            old = [line.rsplit(",", 1)[0] for line in f.read().splitlines()]
+        self.assertEqual(old[0].split(",")[-1], "stance_mass")
+        with open(path, "w") as f:
+            f.write("\n".join(old) + "\n")
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            self.assertIn("| alg1 | 4/4 |", f.read())
 
     def test_z_score(self):
         def row(cost, sd, hops="100"):
@@ -202,6 +293,50 @@ class ShardMergeTest(TempDirTest):
         self.assertEqual(r.returncode, 2)
         self.assertIn("another grid", r.stderr)
         self.assertIn("hops", r.stderr)
+
+    def test_merge_of_shards_is_the_unsharded_unmodelled_map(self):
+        # The unmodelled map with identification off and on: 1 robot x 2 conditions x 2 x 3 = 12
+        # cases; --robot-variant and --identify reach ddoc-hopper.
+        tiny = ["--maps", "unmodelled", "--hops", "3", "--robots", "8", "--kinds", "b_leg,slope_up",
+                "--b-legs", "2", "--slopes", "0.01", "--identification", "off,on",
+                "--hopper", FAKE, "--jobs", "2"]
+        whole = os.path.join(self.tmp, "whole")
+        r = run_tool("robustness_map", *tiny, "--out", whole)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        slices = [os.path.join(self.tmp, f"s{i}") for i in range(2)]
+        for i, d in enumerate(slices):
+            r = run_tool("robustness_map", *tiny, "--out", d, "--shard", f"{i}/2")
+            self.assertEqual(r.returncode, 0, r.stderr)
+        merged = os.path.join(self.tmp, "merged")
+        r = run_tool("robustness_map", "merge", *slices, "--out", merged)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for name in ("unmodelled_map.csv", "manifest.json", "summary.md"):
+            self.assertEqual(read(os.path.join(merged, name)), read(os.path.join(whole, name)),
+                             name)
+        rows = csv_rows(os.path.join(whole, "unmodelled_map.csv"))
+        self.assertEqual([(r["case"], r["identification"]) for r in rows[2:5]],
+                         [("unmod_m8_b_leg2_mrl", "off"), ("unmod_m8_b_leg2_id_alg1", "on"),
+                          ("unmod_m8_b_leg2_id_ocfb", "on")])
+        self.assertEqual(list(rows[0])[-1], "identification")
+        argv = {}
+        for case in ("unmod_m8_b_leg2_alg1", "unmod_m8_slope_up0.01_id_mrl"):
+            with open(os.path.join(whole, "runs", case, "argv.txt")) as f:
+                argv[case] = f.read().split("\n")
+        self.assertIn("--robot-variant", argv["unmod_m8_b_leg2_alg1"])
+        self.assertEqual(argv["unmod_m8_b_leg2_alg1"][argv["unmod_m8_b_leg2_alg1"].index(
+            "--robot-variant") + 1], "b_leg=2")
+        self.assertNotIn("--identify", argv["unmod_m8_b_leg2_alg1"])
+        self.assertIn("--identify", argv["unmod_m8_slope_up0.01_id_mrl"])
+        self.assertIn("slope=-0.01", argv["unmod_m8_slope_up0.01_id_mrl"])
+        with open(os.path.join(whole, "scenarios", "unmod_m8_b_leg2_alg1.xml")) as f:
+            self.assertIn("models/hopper_m8.xml", f.read())
+        for png in ("unmodelled_ocfb.png", "unmodelled_mrl_id.png"):
+            self.assertTrue(filecmp.cmp(os.path.join(merged, "heatmaps", png),
+                                        os.path.join(whole, "heatmaps", png), shallow=False), png)
+        with open(os.path.join(whole, "summary.md")) as f:
+            text = f.read()
+        self.assertIn("(2 in all), identification off", text)
+        self.assertIn("(2 in all), identification on", text)
 
     def test_slurm_array_task_runs_its_slice(self):
         base = os.path.join(self.tmp, "base")
@@ -292,6 +427,15 @@ class UsageTest(TempDirTest):
             (["--preset", "paper", "--hopper", FAKE], ["--preset paper", "no --preset flag"]),
             (["--hopper", os.path.join(self.tmp, "nope")], ["ddoc-hopper not found"]),
             (["--learning", "/><push time='1'", "--hopper", FAKE], ["--learning", "XML attributes"]),
+            (["--maps", "unmodelled", "--kinds", "b_leg,wind", "--hopper", FAKE],
+             ["--kinds", "'wind'"]),
+            (["--maps", "unmodelled", "--gains", "0.5,1.2", "--hopper", FAKE],
+             ["--gains", "1.2", "in (0, 1)"]),
+            (["--maps", "unmodelled", "--slopes", "0.3", "--hopper", FAKE],
+             ["--slopes", "0.3", "in (0, 0.3) rad"]),
+            (["--maps", "unmodelled", "--timeconsts", "0.0005", "--hopper", FAKE],
+             ["--timeconsts", "0.0005", ">= 0.001 s"]),
+            (["--identification", "maybe", "--hopper", FAKE], ["--identification", "'maybe'"]),
         ])
         r = run_tool("robustness_map", "merge", self.tmp, "--out", os.path.join(self.tmp, "m"))
         self.assertEqual(r.returncode, 2)
@@ -352,6 +496,21 @@ class RealRunTest(TempDirTest):
         self.assertIn(push["push_status"], ("recovered", "not recovered"))
         with open(os.path.join(out, "summary.md")) as f:
             self.assertIn("| 9 | 0.01 | 0.5 | 5, ", f.read())
+
+    def test_one_unmodelled_case(self):
+        # The leg damper reaches the robot: summary.json names the variant, and the run differs
+        # from the same case with the damper at 0.
+        out = os.path.join(self.tmp, "map")
+        r = run_tool("robustness_map", "--maps", "unmodelled", "--methods", "ocfb", "--hops", "3",
+                     "--robots", "8", "--kinds", "b_leg", "--b-legs", "2", "--hopper", HOPPER,
+                     "--out", out, "--jobs", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        [row] = csv_rows(os.path.join(out, "unmodelled_map.csv"))
+        self.assertEqual((row["case"], row["exit"], row["hops"], row["identification"]),
+                         ("unmod_m8_b_leg2_ocfb", "0", "3", "off"))
+        run = os.path.join(out, "runs", "unmod_m8_b_leg2_ocfb")
+        with open(os.path.join(run, "summary.json")) as f:
+            self.assertIn("hopper_m8.xml with b_leg=2", json.load(f)["robot"])
 
     def test_learning_attributes_reach_every_run(self):
         # --learning (experiments): the <learning> element of every generated scenario, read by
