@@ -519,16 +519,17 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   EXPECT_EQ(hops[0],
             "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
             "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-            "optimality,stance_mass,reverted");
+            "optimality,stance_mass,reverted,identified_mass,model_mass");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
-  // summary.json's mean_stance_mass is the mean of the hops' stance_mass (the column before the
-  // last), which
+  // summary.json's mean_stance_mass is the mean of the hops' stance_mass (column 26), which
   // weighs the 8 kg robot's torso and leg (8.001 kg), not the model's 10 kg.
   ASSERT_GT(hops.size(), 1u);
   double sum = 0;
   for (size_t i = 1; i < hops.size(); ++i) {
-    const std::string row = hops[i].substr(0, hops[i].rfind(','));
-    sum += std::stod(row.substr(row.rfind(',') + 1));
+    std::stringstream row(hops[i]);
+    std::string cell;
+    for (int column = 0; column < 26; ++column) std::getline(row, cell, ',');
+    sum += std::stod(cell);
   }
   const double mean = sum / static_cast<double>(hops.size() - 1);
   EXPECT_NEAR(mean, 8.001, 1e-3);
