@@ -29,7 +29,9 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 # Leaks inside third-party libraries (libOSMesa), each with its reason: tools/lsan.supp.
 export LSAN_OPTIONS="suppressions=$here/tools/lsan.supp:print_suppressions=0"
 # Also left out: four CLI tests that solve u^0 again and again (62, 54, 40 and 38 s under the
-# sanitizers); the paths they take are run by other tests here (docs/reliability.md).
+# sanitizers), and two that compare whole ddoc-hopper runs (identification, robot variants); the
+# paths they take are run by other tests here (docs/reliability.md).
 slow='^(CliTest\.(TheLawCacheIsOnByDefaultInTheUserCacheDirectory|EveryShippedScenarioRuns|'
-slow+='ModelMjcfFlagReplacesTheScenariosModel)|LawCacheTest\.AnUnusableFileIsSolvedAgainAndReplaced)$'
+slow+='ModelMjcfFlagReplacesTheScenariosModel|IdentifyReSolvesOnTheRobotsMass|'
+slow+='UnmodelledDynamicsVariantsEqualTheirFiles)|LawCacheTest\.AnUnusableFileIsSolvedAgainAndReplaced)$'
 ctest --test-dir "$build_dir" --output-on-failure -j2 -LE sanitizer_slow -E "$slow" "$@"
