@@ -118,6 +118,18 @@ class GridTest(unittest.TestCase):
         self.assertEqual(g["push"]["forces"], [-40.0, -10.0, 30.0])
 
 
+def fake_row(map_kind, name, method, cost, sd, fall_hop, **keys):
+    """A row of a `map_kind` map's CSV: survived with the last-10 cost `cost` (sd `sd`), or,
+    for cost None, fell in hop `fall_hop`; `keys` fills the grid's columns."""
+    row = {c: "" for c in rm.csv_columns(map_kind)}
+    row.update(case=name, method=method, exit="0" if cost else "3",
+               hops="100" if cost else str(fall_hop), survived="1" if cost else "0",
+               fall_hop="" if cost else str(fall_hop),
+               cost_last10="" if cost is None else repr(cost),
+               cost_last10_sd="" if cost is None else repr(sd), **keys)
+    return row
+
+
 class SummaryTest(TempDirTest):
     """summary.md of a hand-written map directory: counts checked by hand."""
 
@@ -135,13 +147,8 @@ class SummaryTest(TempDirTest):
             m = int(keys["mass"])
             a, o = costs[m]
             cost = {"alg1": a, "ocfb": o, "mrl": None}[keys["method"]]
-            rows[name] = {c: "" for c in rm.csv_columns("mass")}
-            rows[name].update(case=name, mass=str(m), c_d="0", speed="0.5", method=keys["method"],
-                              exit="0" if cost else "3", hops="100" if cost else "7",
-                              survived="1" if cost else "0", fall_hop="" if cost else "7",
-                              cost_last10="" if cost is None else repr(cost),
-                              cost_last10_sd="" if cost is None else repr(sds[m]),
-                              learner_status="running")
+            rows[name] = fake_row("mass", name, keys["method"], cost, sds[m], 7,
+                                  mass=str(m), c_d="0", speed="0.5", learner_status="running")
         rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
         rm.report(self.tmp)
         with open(os.path.join(self.tmp, "summary.md")) as f:
@@ -173,14 +180,9 @@ class SummaryTest(TempDirTest):
         for _, name, keys in rm.cases(grid):
             a, o = costs[(keys["kind"], keys["level"])]
             cost = {"alg1": a, "ocfb": o, "mrl": None}[keys["method"]]
-            rows[name] = {c: "" for c in rm.csv_columns("unmodelled")}
-            rows[name].update(case=name, robot_mass="8", kind=keys["kind"],
-                              level=rm.dr.label(keys["level"]), method=keys["method"],
-                              exit="0" if cost else "3", hops="100" if cost else "9",
-                              survived="1" if cost else "0", fall_hop="" if cost else "9",
-                              cost_last10="" if cost is None else repr(cost),
-                              cost_last10_sd="" if cost is None else "0.1",
-                              identification="off")
+            rows[name] = fake_row("unmodelled", name, keys["method"], cost, 0.1, 9,
+                                  robot_mass="8", kind=keys["kind"],
+                                  level=rm.dr.label(keys["level"]), identification="off")
         rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
         rm.report(self.tmp)
         with open(os.path.join(self.tmp, "summary.md")) as f:
