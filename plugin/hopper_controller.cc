@@ -212,6 +212,7 @@ void HopperController::MakeDriver(int warmup) {
 }
 
 void HopperController::ResolveModel(double mass) {
+  const auto start = std::chrono::steady_clock::now();
   // Objects of its own: the simulation side keeps using model_ and fallback_ meanwhile.
   ControllerConfig config = config_;
   config.model.M = mass;
@@ -236,7 +237,9 @@ void HopperController::ResolveModel(double mass) {
   staged_.record = ModelResolve();
   staged_.record.hop = job_hop_;
   staged_.record.mass = mass;
-  staged_.record.law_cache = u0.status;  // RunOffline sets wall_ms
+  staged_.record.law_cache = u0.status;
+  staged_.record.wall_ms =
+      1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void HopperController::TakeOverResolvedModel() {
@@ -605,13 +608,7 @@ void HopperController::RunOffline() {
                                          : std::vector<Vector>());
     }
     next_law_ = learned != nullptr ? learned : &fallback_;
-    if (!std::isnan(job_resolve_)) {
-      const auto resolve_start = std::chrono::steady_clock::now();
-      ResolveModel(job_resolve_);
-      staged_.record.wall_ms =
-          1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - resolve_start)
-                    .count();
-    }
+    if (!std::isnan(job_resolve_)) ResolveModel(job_resolve_);
     offline_error_.clear();
   } catch (const std::exception& e) {
     offline_error_ = std::string("offline part: ") + e.what();
@@ -632,10 +629,12 @@ void HopperController::TakeOfflineResult() {
   // measured_latency: the law takes effect no sooner than this computer produced it.
   double latency = config_.offline_latency;
   if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
-  if (!std::isnan(job_resolve_) && staged_.ready) resolves_.push_back(staged_.record);
+  if (!std::isnan(job_resolve_) && staged_.ready) {  // this hop re-solved u^0: it takes over
+    resolves_.push_back(staged_.record);
+    if (!Synchronous()) law_pending_ = true;
+    latency = std::max(latency, config_.identification.resolve_latency);
+  }
   job_resolve_ = std::numeric_limits<double>::quiet_NaN();
-  if (staged_.ready && !Synchronous()) law_pending_ = true;  // the re-solved u^0 takes over
-  if (staged_.ready) latency = std::max(latency, config_.identification.resolve_latency);
   if (law_pending_) law_due_ = job_end_ + latency;
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;

@@ -9,8 +9,8 @@
 #define DDOC_PLUGIN_HOPPER_CONTROLLER_H_
 
 #include <atomic>
-#include <limits>
 #include <condition_variable>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <string>

@@ -177,9 +177,8 @@ void CheckOverrides(const app::RunOverrides& o) {
   if (!o.method.empty() && o.method != "alg1" && o.method != "ocfb" && o.method != "mrl") {
     throw py::value_error("method \"" + o.method + "\": expected alg1, ocfb or mrl");
   }
-  if (!o.preset.empty() && o.preset != "default" && o.preset != "paper" &&
-      o.preset != "identified") {
-    throw py::value_error("preset \"" + o.preset + "\": expected default, paper or identified");
+  if (!o.preset.empty() && !app::IsPreset(o.preset)) {
+    throw py::value_error("preset \"" + o.preset + "\": expected " + app::kPresetNames);
   }
   if (o.hops && *o.hops < 0) {
     throw py::value_error("hops must be >= 0, got " + std::to_string(*o.hops));

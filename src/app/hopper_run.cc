@@ -141,9 +141,8 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
                   "= default with --identify (overrides the scenario)");
   cli->add_flag_function(
       "--identify,!--no-identify", [this](std::int64_t count) { identify = count > 0; },
-                "identify the robot's mass from the stances and re-solve u^0 on it when the "
-                "model's leaves the estimate's confidence region (<identification mass>; "
-                "overrides the scenario)");
+      "identify the robot's mass from the stances and re-solve u^0 on it when the model's "
+      "leaves the estimate's confidence region (<identification mass>; overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
   cli->add_flag("--substep-events", substep_events,
                 "locate touchdown and takeoff inside the physics step for the measured durations "
@@ -190,6 +189,10 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
                   "phase of a hop (repeatable)");
 }
 
+bool IsPreset(const std::string& name) {
+  return name == "default" || name == "paper" || name == "identified";
+}
+
 std::string DefaultLawCacheDir() {
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   if (xdg != nullptr && xdg[0] == '/') return std::string(xdg) + "/ddoc";
@@ -226,8 +229,8 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   Scenario s = LoadScenario(path);
   if (!o.method.empty()) s.method = ParseMethod(o.method);
   if (!o.preset.empty()) {
-    if (o.preset != "default" && o.preset != "paper" && o.preset != "identified") {
-      throw ScenarioError("--preset \"" + o.preset + "\": expected default, paper or identified");
+    if (!IsPreset(o.preset)) {
+      throw ScenarioError("--preset \"" + o.preset + "\": expected " + kPresetNames);
     }
     s.learning.paper = o.preset == "paper";
     if (o.preset == "identified") s.identify_mass = true;

@@ -99,6 +99,11 @@ struct RunOverrides {
   void Register(CLI::App* cli, bool full);
 };
 
+/// The presets of --preset (and Python's preset=), as an error message lists them.
+constexpr const char* kPresetNames = "default, paper or identified";
+/// True when `name` is one of kPresetNames.
+bool IsPreset(const std::string& name);
+
 /// The per-user directory of stored u^0 laws: $XDG_CACHE_HOME/ddoc when XDG_CACHE_HOME is an
 /// absolute path, else $HOME/.cache/ddoc; "" (no cache) when neither is set.
 std::string DefaultLawCacheDir();
