@@ -24,7 +24,7 @@ namespace ddoc::plugin {
 namespace {
 
 constexpr char kMagic[8] = {'D', 'D', 'O', 'C', 'L', 'A', 'W', '\n'};
-constexpr std::uint32_t kFormat = 1;
+constexpr std::uint32_t kFormat = 2;  // 2: the cyclic value after the law
 
 // A field added to one of these structs must be added to InitialLawKey below (or stated there as
 // not read by the model solve); the sizes are those of x86-64 with libstdc++.
@@ -33,11 +33,11 @@ static_assert(sizeof(HopperParams) == 88, "HopperParams changed: update InitialL
 static_assert(sizeof(HopperCostWeights) == 160, "HopperCostWeights changed: update InitialLawKey");
 static_assert(sizeof(NominalGaitSettings) == 56, "NominalGaitSettings changed: update the key");
 static_assert(sizeof(HopperModeDurations) == 32, "HopperModeDurations changed: update the key");
-static_assert(sizeof(BackwardPassSettings) == 48, "BackwardPassSettings changed: update the key");
+static_assert(sizeof(BackwardPassSettings) == 56, "BackwardPassSettings changed: update the key");
 static_assert(sizeof(SwitchingTimeSettings) == 16, "SwitchingTimeSettings changed: update the key");
 static_assert(sizeof(BoxQPSettings) == 48, "BoxQPSettings changed: update InitialLawKey");
 static_assert(sizeof(OnlineControllerSettings) == 80, "OnlineControllerSettings changed: update");
-static_assert(sizeof(LearnerSettings) == 312, "LearnerSettings changed: update InitialLawKey");
+static_assert(sizeof(LearnerSettings) == 320, "LearnerSettings changed: update InitialLawKey");
 #endif
 
 std::uint64_t Fnv1a(const char* data, std::size_t n, std::uint64_t h = 0xcbf29ce484222325ULL) {
@@ -159,6 +159,7 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->B("backward.use_previous_du", b.use_previous_du);
   k->B("backward.psd_switching_hessians", b.psd_switching_hessians);
   k->I("backward.max_substeps", b.max_substeps);
+  k->I("backward.min_substeps", b.min_substeps);
   k->D("backward.cyclic_value", b.cyclic_value);
   k->I("backward.cyclic_max_sweeps", b.cyclic_max_sweeps);
   k->D("backward.cyclic_tolerance", b.cyclic_tolerance);
@@ -236,6 +237,8 @@ std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& 
   Put(&out, static_cast<std::int32_t>(l.u.rows()));
   PutArray(&out, l.tau.data(), l.tau.size());
   for (const Matrix* a : {&l.x, &l.u, &l.Kx, &l.c, &l.huu}) PutArray(&out, a->data(), a->size());
+  Put(&out, static_cast<std::int32_t>(s.cyclic_value.rows()));
+  PutArray(&out, s.cyclic_value.data(), s.cyclic_value.size());
   Put(&out, LawFileChecksum(out.data(), out.size()));
   return out;
 }
@@ -286,12 +289,19 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
       !r.Get(&m) || n_max < 1 || n_max > 4096 || m < 1 || m > 4096) {
     return fail("bad sizes");
   }
-  // The sizes must account for the rest of the file exactly before anything is allocated.
+  // The sizes must account for the rest of the file exactly before anything is allocated: the
+  // law's arrays, the cyclic value's size n_0 (int32) and its n_0^2 doubles.
   const std::size_t doubles = static_cast<std::size_t>(S) *
                               (1 + static_cast<std::size_t>(n_max) + m +
                                static_cast<std::size_t>(m) * n_max + m +
                                static_cast<std::size_t>(m) * m);
-  if (r.remaining() % sizeof(double) != 0 || doubles != r.remaining() / sizeof(double)) {
+  if (r.remaining() < sizeof(std::int32_t) ||
+      (r.remaining() - sizeof(std::int32_t)) % sizeof(double) != 0) {
+    return fail("array sizes do not match the file length");
+  }
+  const std::size_t cyclic = (r.remaining() - sizeof(std::int32_t)) / sizeof(double) - doubles;
+  if (doubles > (r.remaining() - sizeof(std::int32_t)) / sizeof(double) ||
+      cyclic > static_cast<std::size_t>(n_max) * n_max) {
     return fail("array sizes do not match the file length");
   }
   l.tau.resize(S);
@@ -304,7 +314,14 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   for (Matrix* a : {&l.x, &l.u, &l.Kx, &l.c, &l.huu}) {
     if (!r.Array(a->data(), a->size())) return fail("truncated arrays");
   }
+  std::int32_t n0 = 0;
+  if (!r.Get(&n0) || n0 < 0 || n0 > n_max || static_cast<std::size_t>(n0) * n0 != cyclic) {
+    return fail("bad cyclic value");
+  }
+  s->cyclic_value.resize(n0, n0);
+  if (!r.Array(s->cyclic_value.data(), s->cyclic_value.size())) return fail("truncated arrays");
   if (!r.done()) return fail("trailing bytes");
+  if (!s->cyclic_value.allFinite()) return fail("non-finite cyclic value");
   if (!std::isfinite(s->model_cost)) return fail("non-finite model cost");
   return true;
 }

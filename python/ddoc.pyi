@@ -112,6 +112,7 @@ class BackwardPassSettings:
     use_previous_du: bool
     psd_switching_hessians: bool
     max_substeps: int
+    min_substeps: int
     def __init__(self) -> None: ...
 
 class SwitchingTimeSettings:

@@ -913,7 +913,8 @@ class SolveInterrupted(KeyboardInterrupt):
       .def_readwrite("time_curvature", &BackwardPassSettings::time_curvature)
       .def_readwrite("use_previous_du", &BackwardPassSettings::use_previous_du)
       .def_readwrite("psd_switching_hessians", &BackwardPassSettings::psd_switching_hessians)
-      .def_readwrite("max_substeps", &BackwardPassSettings::max_substeps);
+      .def_readwrite("max_substeps", &BackwardPassSettings::max_substeps)
+      .def_readwrite("min_substeps", &BackwardPassSettings::min_substeps);
 
   py::class_<SwitchingTimeSettings>(mod, "SwitchingTimeSettings", "Settings of the switching-time update (31).")
       .def(py::init<>())

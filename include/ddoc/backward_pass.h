@@ -5,6 +5,7 @@
 #ifndef DDOC_BACKWARD_PASS_H_
 #define DDOC_BACKWARD_PASS_H_
 
+#include <memory>
 #include <vector>
 
 #include "ddoc/box_qp.h"
@@ -13,7 +14,6 @@
 #include "ddoc/trajectory.h"
 
 namespace ddoc {
-
 /// Which equations P and p follow (docs/engine.md derives both).
 enum class BackwardEquation {
   /// The paper's (30): Lyapunov-type P (no quadratic term), p the adjoint of the linearized
@@ -63,8 +63,12 @@ struct BackwardPassSettings {
   /// semidefinite cone before it enters P (allocates an eigen-decomposition per switch).
   /// Default false.
   bool psd_switching_hessians = false;
-  /// kRiccati: most sub-steps per sample interval where h |A_cl|_inf > 1 (stiff). >= 1; default 1000.
+  /// kRiccati: most sub-steps per sample interval where h |S^-1 A_cl S|_inf > 1 (stiff; S the
+  /// diagonal balancing of the closed loop A_cl). >= 1; default 1000.
   int max_substeps = 1000;
+  /// Fewest sub-steps per sample interval, any equation (a finer reference solution of the same
+  /// grid). >= 1; default 1.
+  int min_substeps = 1;
   /// Cyclic (periodic) value gamma_c in [0, 1], NOT in the paper, kRiccati only. 0 (default):
   /// the problem ends at T_K. > 0, for a system with a cycle reset g_{K-1}:
   /// P_xx(K) = Phi_xx + gamma_c G^T P_0 G (G = dg_{K-1}/dx at the end of the nominal, P_0 the
@@ -117,7 +121,8 @@ enum class BackwardStatus {
 /// eigen-decompositions of psd_switching_hessians).
 class BackwardPass {
  public:
-  BackwardPass() = default;
+  BackwardPass();
+  ~BackwardPass();
   BackwardPass(const BackwardPass&) = delete;
   BackwardPass& operator=(const BackwardPass&) = delete;
 
@@ -134,6 +139,13 @@ class BackwardPass {
            const Matrix* du_prev = nullptr);
   /// Forget the cyclic P_0 of the previous Run (the next Run starts from P_0 = 0).
   void ResetCyclicValue() { cyclic_valid_ = false; }
+  /// The cyclic P_0 (state block of P(0), n_0 x n_0) that the next Run's sweeps start from: the
+  /// last Run's fixed point or a seed; empty when they start from P_0 = 0.
+  Matrix cyclic_value() const;
+  /// Start the next Run's sweeps from `P0` (n_0 x n_0, finite) instead of the last Run's fixed
+  /// point, e.g. the fixed point of a pass on a similar nominal (the model's solve of the law
+  /// that is about to run). Throws InvalidArgument on a wrong size or a non-finite entry.
+  void SeedCyclicValue(const Matrix& P0);
 
   BackwardStatus status() const { return status_; }
   bool valid() const { return valid_; }
@@ -144,6 +156,9 @@ class BackwardPass {
   bool alpha_scales_feedback() const { return settings_.equation == BackwardEquation::kLyapunov; }
   /// Sweeps of the last Run (1 without a cyclic value).
   int sweeps() const { return sweeps_; }
+  /// Integration steps of the last Run over all its sweeps (sample intervals plus the extra
+  /// sub-steps of stiff ones).
+  long substeps() const { return substeps_; }
   double regularization() const { return mu_; }  ///< mu of the last Run
   /// max |diag L_uu| over the intervals of the last Run (before mu; a scale for mu).
   double luu_scale() const { return luu_scale_; }
@@ -211,8 +226,10 @@ class BackwardPass {
   bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
   // FreeSet of a mode of zero duration (kRiccati): no free input, the Hamiltonian's minimizer.
   bool VanishedStep(int n, const ConstVectorRef& p);
-  double RiccatiStiffness(int n, const ConstMatrixRef& P);
-  double RiccatiStiffnessBound(int n, const ConstMatrixRef& P) const;
+  // max |eigenvalue| bound of the closed loop: |S^-1 A_cl S|_inf, S rebalanced when above limit.
+  double RiccatiStiffness(int n, const ConstMatrixRef& P, double limit);
+  // Y = X A for the interval's [D f_x, f] (fx = true) or D f_u, A's nonzero pattern known.
+  void Product(int rows, int depth, const double* X, int ldx, bool fx, double* Y, int ldy);
   void Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
                   const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                   bool store_mid, int s);
@@ -246,6 +263,8 @@ class BackwardPass {
   double predicted_linear_ = 0, predicted_quadratic_ = 0;
   // Workspace.
   Interval c_;
+  struct Sparsity;                      // the nonzero patterns of c_.fx and c_.fu (the .cc's)
+  std::unique_ptr<Sparsity> sparsity_;
   const Matrix* du_prev_ = nullptr;
   int du_index_ = 0;
   Vector xmid_;             // n_max
@@ -264,7 +283,6 @@ class BackwardPass {
   Matrix Mt_;               // m x nz_max: M^T
   Vector hx_curv_, hu_curv_;  // n, m: f_x^T p_x, f_u^T p_x
   Vector gu_, k_, tmpm_;    // m
-  Vector bdu_;              // n_max: F_u du_prev
   Matrix tmp_;              // nz_max x nz_max (the Riccati term M_F H_FF^-1 M_F^T of a stage)
   bool riccati_term_ = false;  // tmp_ holds the Riccati term of the last Derivative
   Eigen::LLT<Matrix> llt_;  // m x m
@@ -272,6 +290,8 @@ class BackwardPass {
   Matrix stiff_gain_;       // m x n_max: H_FF^-1 (F_u^T P_xx + L_ux) of the stiffness estimate
   Matrix stiff_k_;          // m x n_max: H_FF^-1 stiff_gain_
   Matrix stiff_acl_;        // n_max x n_max: the closed-loop D f_x - F_u gain
+  Vector stiff_scale_;      // n_max: the diagonal S of the balanced closed loop (this mode's)
+  Matrix stiff_rows_;       // n_max x 2: row sums of |D f_x S| and |F_u| (the cheap bound)
   std::vector<int> free_;   // m
   BoxQP qp_;
   // Terminal event projection.
@@ -283,6 +303,7 @@ class BackwardPass {
   Matrix cyclic_P0_, cyclic_G_, cyclic_tmp_;  // n_max x n_max
   bool cyclic_valid_ = false;
   int sweeps_ = 0;
+  long substeps_ = 0;
 };
 
 }  // namespace ddoc

@@ -8,8 +8,17 @@
 #include <sstream>
 
 #include "small_product.h"
+#include "symmetric_update.h"
 
 namespace ddoc {
+
+// The nonzero patterns of the interval's [D f_x, f] (n x (n+1)) and D f_u (n x m).
+struct BackwardPass::Sparsity {
+  internal::ColumnPattern fx, fu;
+};
+
+BackwardPass::BackwardPass() : sparsity_(std::make_unique<Sparsity>()) {}
+BackwardPass::~BackwardPass() = default;
 
 void BackwardPass::Interval::Allocate(int n, int m) {
   f.setZero(n);
@@ -48,6 +57,10 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
     throw InvalidArgument("BackwardPassSettings: max_substeps = " +
                           std::to_string(settings.max_substeps) + ", expected >= 1");
   }
+  if (settings.min_substeps < 1) {
+    throw InvalidArgument("BackwardPassSettings: min_substeps = " +
+                          std::to_string(settings.min_substeps) + ", expected >= 1");
+  }
   problem_ = &problem;
   settings_ = settings;
   const SwitchedSystem& sys = *problem.system;
@@ -76,6 +89,8 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   h_store_.setZero(m_ * m_, max_samples);
   gradient_T_.setZero(K_);
   c_.Allocate(n_max_, m_);
+  sparsity_->fx.Allocate(n_max_, n_max_ + 1);
+  sparsity_->fu.Allocate(n_max_, m_);
   xmid_.setZero(n_max_);
   phiz_.setZero(n_max_);
   phizz_.setZero(n_max_, n_max_);
@@ -103,13 +118,14 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   gu_.setZero(m_);
   k_.setZero(m_);
   tmpm_.setZero(m_);
-  bdu_.setZero(n_max_);
   tmp_.setZero(nz_max_, nz_max_);
   llt_ = Eigen::LLT<Matrix>(m_);
   hff_.setZero(m_, m_);
   stiff_gain_.setZero(m_, n_max_);
   stiff_k_.setZero(m_, n_max_);
   stiff_acl_.setZero(n_max_, n_max_);
+  stiff_scale_.setOnes(n_max_);
+  stiff_rows_.setZero(n_max_, 2);
   free_.assign(m_, 0);
   qp_.Allocate(m_);
   event_f_.setZero(n_max_);
@@ -154,45 +170,33 @@ Eigen::Map<const Vector> BackwardPass::p2_initial() const {
 }
 Matrix BackwardPass::P22_initial() const { return P(0, 0).bottomRightCorner(K_, K_); }
 
+Matrix BackwardPass::cyclic_value() const {
+  if (!cyclic_valid_ || problem_ == nullptr) return Matrix();
+  const int n0 = problem_->system->state_dim(0);
+  return cyclic_P0_.topLeftCorner(n0, n0);
+}
+
+void BackwardPass::SeedCyclicValue(const Matrix& P0) {
+  if (problem_ == nullptr) throw InvalidArgument("BackwardPass::SeedCyclicValue: call Allocate first");
+  const int n0 = problem_->system->state_dim(0);
+  if (P0.rows() != n0 || P0.cols() != n0) {
+    throw InvalidArgument("BackwardPass::SeedCyclicValue: P0 is " + std::to_string(P0.rows()) +
+                          "x" + std::to_string(P0.cols()) + ", expected n_0 x n_0 = " +
+                          std::to_string(n0) + "x" + std::to_string(n0));
+  }
+  if (!P0.allFinite()) {
+    throw InvalidArgument("BackwardPass::SeedCyclicValue: P0 has a non-finite entry");
+  }
+  cyclic_P0_.topLeftCorner(n0, n0) = P0;
+  cyclic_valid_ = true;
+}
+
 namespace {
 
 // y = A^T x for column-major A (one contiguous dot product per column of A).
 template <class MatA, class VecX, class VecY>
 inline void TransposeTimes(const MatA& A, const VecX& x, VecY&& y) {
   for (Eigen::Index i = 0; i < A.cols(); ++i) y(i) = A.col(i).dot(x);
-}
-
-// With the half Y of dP = Y + Y^T (nz x nz) and the symmetric Q = q_scale * L (n x n, the
-// unscaled l_xx) added to the top-left block: kStage Ps = P + a dP, kStep P += a dP, kStore
-// out = dP. Each pair (r, c), (c, r) gets the same value, so P stays exactly symmetric.
-enum class SymKind { kStage, kStep, kStore };
-// R (nz x nz, symmetric; may be null) is subtracted once: the Riccati term M_F H_FF^-1 M_F^T.
-template <SymKind kKind>
-void Symmetrize(int nz, int n, const double* Y, int ldy, const double* L, int ldl, double q_scale,
-                const double* R, int ldr, double* P, int ldp, double* out, int ldo, double a) {
-  for (int c = 0; c < nz; ++c) {
-    const double* yc = Y + static_cast<ptrdiff_t>(c) * ldy;
-    const double* lc = L + static_cast<ptrdiff_t>(c) * ldl;
-    const double* rcol = R != nullptr ? R + static_cast<ptrdiff_t>(c) * ldr : nullptr;
-    for (int r = 0; r <= c; ++r) {
-      double d = yc[r] + Y[static_cast<ptrdiff_t>(r) * ldy + c];
-      if (c < n) d += q_scale * lc[r];
-      if (rcol != nullptr) d -= rcol[r];
-      const ptrdiff_t rc = static_cast<ptrdiff_t>(c) * ldp + r;
-      const ptrdiff_t cr = static_cast<ptrdiff_t>(r) * ldp + c;
-      if (kKind == SymKind::kStage) {
-        out[static_cast<ptrdiff_t>(c) * ldo + r] = P[rc] + a * d;
-        out[static_cast<ptrdiff_t>(r) * ldo + c] = P[cr] + a * d;
-      } else if (kKind == SymKind::kStep) {
-        const double v = P[rc] + a * d;
-        P[rc] = v;
-        P[cr] = v;
-      } else {
-        out[static_cast<ptrdiff_t>(c) * ldo + r] = d;
-        out[static_cast<ptrdiff_t>(r) * ldo + c] = d;
-      }
-    }
-  }
 }
 
 }  // namespace
@@ -220,11 +224,13 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   fx *= D;
   fu *= D;
   c_.fx.col(n).head(n) = f;  // [D f_x, f]: one product gives P(:, 0:n) D f_x and P(:, 0:n) f
+  sparsity_->fx.Find(n, n + 1, c_.fx.data(), static_cast<int>(c_.fx.outerStride()));
+  sparsity_->fu.Find(n, m_, c_.fu.data(), static_cast<int>(c_.fu.outerStride()));
   c_.l = cost.Running(k, xm, u);
   auto lx = c_.lx.head(n);
   auto lxx = c_.lxx.topLeftCorner(n, n);
   auto lux = c_.lux.leftCols(n);
-  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);  // lxx: D is applied in Symmetrize
+  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);  // lxx: D is applied in SymmetricStage
   lux *= D;
   if (D > 0) {
     c_.H *= D;
@@ -313,6 +319,20 @@ bool BackwardPass::VanishedStep(int n, const ConstVectorRef& p) {
   return true;
 }
 
+void BackwardPass::Product(int rows, int depth, const double* X, int ldx, bool fx, double* Y,
+                           int ldy) {
+  // The model's Jacobians are sparse (the hopper's D f_x: 17 of 196 entries in flight); the
+  // sparse kernel skips exact zeros and gives the dense kernel's bits. Dense where they are not.
+  const internal::ColumnPattern& pattern = fx ? sparsity_->fx : sparsity_->fu;
+  const double* A = fx ? c_.fx.data() : c_.fu.data();
+  const int lda = static_cast<int>(fx ? c_.fx.outerStride() : c_.fu.outerStride());
+  if (2 * pattern.nonzeros() <= depth * pattern.cols) {
+    internal::SparseProduct(rows, X, ldx, A, lda, pattern, Y, ldy);
+  } else {
+    internal::SmallProduct(rows, pattern.cols, depth, X, ldx, A, lda, Y, ldy);
+  }
+}
+
 void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const ConstVectorRef& p,
                               const ConstVectorRef& lam, MatrixRef dP, VectorRef dp, VectorRef dlam,
                               bool store_mid, int s) {
@@ -322,27 +342,34 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
   const bool riccati = settings_.equation == BackwardEquation::kRiccati;
   const double D = c_.D;
   riccati_term_ = false;
-  const auto f = c_.f.head(n);
-  const auto fx = c_.fx.topLeftCorner(n, n);  // D f_x
-  const auto fu = c_.fu.topRows(n);           // D f_u
   const auto px = p.head(n);
   const int ldP = static_cast<int>(P.outerStride());
   const int ldd = static_cast<int>(dP.outerStride());
+  const int ldfx = static_cast<int>(c_.fx.outerStride());
+  const int ldfu = static_cast<int>(c_.fu.outerStride());
   // dP is returned as its "half" Y with dP = Y + Y^T + D l_xx - M_F H_FF^{-1} M_F^T
-  // (Symmetrize forms the sum fused with the stage update; the last term is left in tmp_).
+  // (SymmetricStage forms the sum fused with the stage update; the last term is left in tmp_).
   // P F_z = [P(:, 0:n) D f_x, w c^T] with w = P(:, 0:n) f: the product goes straight into the
   // left columns of Y, w into column n+k (and -w into n+k-1).
-  internal::SmallProduct(nz, n + 1, n, P.data(), ldP, c_.fx.data(),
-                         static_cast<int>(c_.fx.outerStride()), dP.data(), ldd);
+  Product(nz, n, P.data(), ldP, true, dP.data(), ldd);
   // Column n now holds w; move it to column n + k, -w to n + k - 1, zeros elsewhere.
-  if (k > 0) {
-    auto w = w_.head(nz);
-    w = dP.col(n);
-    dP.rightCols(K).setZero();
-    dP.col(n + k) = w;
-    dP.col(n + k - 1) = -w;
-  } else {
-    dP.rightCols(K - 1).setZero();
+  {
+    double* y = dP.data();
+    double* wn = y + static_cast<Eigen::Index>(n) * ldd;
+    if (k > 0) {
+      double* wk = y + static_cast<Eigen::Index>(n + k) * ldd;
+      double* wk1 = wk - ldd;
+      for (int i = 0; i < nz; ++i) {
+        const double v = wn[i];
+        wk[i] = v;  // n + k > n: read before it is cleared below
+        wk1[i] = -v;
+      }
+    }
+    for (int c = n; c < nz; ++c) {
+      if (c == n + k || (k > 0 && c == n + k - 1)) continue;
+      double* yc = y + static_cast<Eigen::Index>(c) * ldd;
+      for (int i = 0; i < nz; ++i) yc[i] = 0.0;
+    }
   }
   // + (l_x + time curvature p_x^T f_x) c^T in the (x, T) column(s) (the symmetric sum adds
   // its transpose; D l_xx is added there too).
@@ -351,72 +378,89 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     TransposeTimes(c_.fx_unit.topLeftCorner(n, n), px, hx);
     TransposeTimes(c_.fu_unit.topRows(n), px, hu_curv_);
   } else if (settings_.time_curvature) {
-    TransposeTimes(fx, px, hx);
+    internal::SparseTransposeTimes(c_.fx.data(), ldfx, sparsity_->fx, n, px.data(), hx.data());
     hx *= 1.0 / D;
-    TransposeTimes(fu, px, hu_curv_);
+    internal::SparseTransposeTimes(c_.fu.data(), ldfu, sparsity_->fu, m, px.data(),
+                                   hu_curv_.data());
     hu_curv_ *= 1.0 / D;
   } else {
     hx.setZero();
     hu_curv_.setZero();
   }
-  {
-    auto v = bdu_.head(n);  // scratch: l_x + p_x^T f_x
-    v = c_.lx.head(n) + hx;
-    dP.col(n + k).head(n) += v;
-    if (k > 0) dP.col(n + k - 1).head(n) -= v;
+  for (int i = 0; i < n; ++i) {  // l_x + p_x^T f_x
+    const double v = c_.lx(i) + hx(i);
+    dP(i, n + k) += v;
+    if (k > 0) dP(i, n + k - 1) -= v;
   }
-  // dp = F_z^T p + L_z: x part D f_x^T p_x + D l_x, T part c (f^T p_x + l).
-  TransposeTimes(fx, px, dp.head(n));
-  dp.head(n) += D * c_.lx.head(n);
-  dp.tail(K).setZero();
-  {
-    const double pt = f.dot(px) + c_.l;
-    dp(n + k) = pt;
-    if (k > 0) dp(n + k - 1) = -pt;
-  }
+  // dp = F_z^T p + L_z: x part D f_x^T p_x + D l_x, T part c (f^T p_x + l); the transposed
+  // product over [D f_x, f] gives D f_x^T p_x and f^T p_x (into dp(n)) at once.
+  auto adjoint_rate = [&](const ConstVectorRef& v, VectorRef dv) {
+    internal::SparseTransposeTimes(c_.fx.data(), ldfx, sparsity_->fx, n + 1, v.data(), dv.data());
+    const double vt = dv(n) + c_.l;
+    for (int i = 0; i < n; ++i) dv(i) += D * c_.lx(i);
+    dv.tail(K).setZero();
+    dv(n + k) = vt;
+    if (k > 0) dv(n + k - 1) = -vt;
+  };
+  adjoint_rate(p, dp);
   // M = P F_u + L_zu (nz x m): needed by kRiccati, by use_previous_du and for the gain output.
   const bool need_M = riccati || store_mid || (settings_.use_previous_du && du_prev_ != nullptr);
   auto M = M_.topRows(nz);
   const int ldM = static_cast<int>(M_.outerStride());
   if (need_M && m > 0) {
-    internal::SmallProduct(nz, m, n, P.data(), ldP, fu.data(),
-                           static_cast<int>(c_.fu.outerStride()), M_.data(), ldM);
-    M.topRows(n) += c_.lux.leftCols(n).transpose();
-    hu_curv_ += c_.lu;  // l_u + p_x^T f_u: the row of L_uz + curvature for T_k
-    M.row(n + k) += hu_curv_.transpose();
-    if (k > 0) M.row(n + k - 1) -= hu_curv_.transpose();
+    Product(nz, n, P.data(), ldP, false, M_.data(), ldM);
+    for (int j = 0; j < m; ++j) {
+      double* mj = M_.data() + static_cast<Eigen::Index>(j) * ldM;
+      for (int i = 0; i < n; ++i) mj[i] += c_.lux(j, i);
+      const double h = hu_curv_(j) + c_.lu(j);  // l_u + p_x^T f_u: the row of L_uz for T_k
+      hu_curv_(j) = h;
+      mj[n + k] += h;
+      if (k > 0) mj[n + k - 1] -= h;
+    }
   }
-  if (m > 0) TransposeTimes(fu, px, gu_);
-  gu_ += D * c_.lu;
+  if (m > 0) {
+    internal::SparseTransposeTimes(c_.fu.data(), ldfu, sparsity_->fu, m, px.data(), gu_.data());
+  }
+  for (int i = 0; i < m; ++i) gu_(i) += D * c_.lu(i);
   if (riccati && m > 0) {
-    // k = kc - Hinv (g_u + H kc), dP -= (M Hinv) M^T, dp += M k.
-    tmpm_ = gu_;
-    tmpm_.noalias() += c_.H * c_.kc;
-    k_ = c_.kc;
-    k_.noalias() -= c_.Hinv * tmpm_;
+    // k = kc - Hinv (g_u + H kc), dP -= (M Hinv) M^T (its upper triangle, all SymmetricStage
+    // reads), dp += M k.
+    for (int i = 0; i < m; ++i) {
+      double t = gu_(i);
+      for (int j = 0; j < m; ++j) t += c_.H(i, j) * c_.kc(j);
+      tmpm_(i) = t;
+    }
+    for (int i = 0; i < m; ++i) {
+      double t = 0.0;
+      for (int j = 0; j < m; ++j) t += c_.Hinv(i, j) * tmpm_(j);
+      k_(i) = c_.kc(i) - t;
+    }
     const int ldW = static_cast<int>(W_.outerStride());
     internal::SmallProduct(nz, m, m, M_.data(), ldM, c_.Hinv.data(),
                            static_cast<int>(c_.Hinv.outerStride()), W_.data(), ldW);
-    auto Mt = Mt_.leftCols(nz);  // m x nz
-    Mt = M.transpose();
+    double* mt = Mt_.data();  // M^T, m x nz (leading dimension m)
+    for (int j = 0; j < m; ++j) {
+      const double* mj = M_.data() + static_cast<Eigen::Index>(j) * ldM;
+      for (int i = 0; i < nz; ++i) mt[i * m + j] = mj[i];
+    }
     const int ldt = static_cast<int>(tmp_.outerStride());
-    internal::SmallProduct(nz, nz, m, W_.data(), ldW, Mt.data(), m, tmp_.data(), ldt);
-    riccati_term_ = true;  // Symmetrize subtracts tmp_
-    dp.noalias() += M * k_;
+    for (int c = 0; c < nz; c += 4) {  // blocks of 4 columns, down to the diagonal
+      const int cols = std::min(4, nz - c);
+      internal::SmallProduct(c + cols, cols, m, W_.data(), ldW, mt + c * m, m, tmp_.data() + c * ldt,
+                             ldt);
+    }
+    riccati_term_ = true;  // SymmetricStage subtracts tmp_
+    for (int j = 0; j < m; ++j) {  // dp += M k
+      const double* mj = M_.data() + static_cast<Eigen::Index>(j) * ldM;
+      const double kj = k_(j);
+      for (int r = 0; r < nz; ++r) dp(r) += mj[r] * kj;
+    }
   } else if (settings_.use_previous_du && du_prev_ != nullptr && m > 0) {
     dp.noalias() += M * du_prev_->col(du_index_);
   }
   // The gradient adjoint: dlam = F_z^T lam + L_z (aliases p when the p-equation is the adjoint).
   const bool separate_lambda = riccati || settings_.use_previous_du;
-  if (separate_lambda) {
-    const auto lx = lam.head(n);
-    TransposeTimes(fx, lx, dlam.head(n));
-    dlam.head(n) += D * c_.lx.head(n);
-    dlam.tail(K).setZero();
-    const double lt = f.dot(lx) + c_.l;
-    dlam(n + k) = lt;
-    if (k > 0) dlam(n + k - 1) = -lt;
-  }
+  if (separate_lambda) adjoint_rate(lam, dlam);
   if (store_mid) {
     Eigen::Map<Matrix> gain(gain_store_.col(s).data(), m, nz);
     if (m > 0) gain = M.transpose();
@@ -429,7 +473,10 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     }
     ff_store_.col(s) = gu_;
     auto grad = grad_store_.col(s);
-    if (m > 0) TransposeTimes(fu, separate_lambda ? lam.head(n) : px, grad);
+    if (m > 0) {
+      internal::SparseTransposeTimes(c_.fu.data(), ldfu, sparsity_->fu, m,
+                                     separate_lambda ? lam.data() : px.data(), grad.data());
+    }
     grad += D * c_.lu;
     if (riccati) {
       if (box_ && settings_.box_aware && m > 0 && D > 0) {
@@ -583,20 +630,27 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
   const bool separate_lambda = riccati || settings_.use_previous_du;
   // Stage 1 at the right end, stage 2 at the midpoint (its outputs are the interval's).
   const int ld = nz_max_;
-  const double* lxx = c_.lxx.data();
-  const int ldl = static_cast<int>(c_.lxx.outerStride());
-  const int ldr = static_cast<int>(tmp_.outerStride());
-  auto R = [&]() -> const double* { return riccati_term_ ? tmp_.data() : nullptr; };
   const double D = c_.D;
+  // dP = Y + Y^T + D l_xx - R of a stage whose Derivative left Y in `Y` (R in tmp_).
+  auto terms = [&](MatrixRef Y) {
+    internal::SymmetricTerms t;
+    t.nz = nz;
+    t.n = n;
+    t.Y = Y.data();
+    t.ldy = ld;
+    t.L = c_.lxx.data();
+    t.ldl = static_cast<int>(c_.lxx.outerStride());
+    t.q = D;
+    t.R = riccati_term_ ? tmp_.data() : nullptr;
+    t.ldr = static_cast<int>(tmp_.outerStride());
+    return t;
+  };
+  using internal::SymmetricStage;
+  using internal::SymmetricUpdate;
   Derivative(k, n, P, p, lam, d0, e0, l0, false, s);
-  if (!rk4) {
-    Symmetrize<SymKind::kStage>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld,
-                                Ps.data(), ld, 0.5 * h);
-  } else {
-    Symmetrize<SymKind::kStore>(nz, n, d0.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d0.data(),
-                                ld, 0.0);
-    Ps = P + (0.5 * h) * d0;
-  }
+  // RK4 keeps each stage's dP (upper triangle) in its Y for the final combination.
+  SymmetricStage(terms(d0), rk4 ? SymmetricUpdate::kRk4Stage : SymmetricUpdate::kStage, P.data(),
+                 ld, Ps.data(), ld, 0.5 * h);
   ps = p + (0.5 * h) * e0;
   if (separate_lambda) lams = lam + (0.5 * h) * l0;
   Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d1, e1, l1, store, s);
@@ -606,8 +660,7 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
     predicted_quadratic_ += interval * k_.dot(tmpm_);
   }
   if (!rk4) {
-    Symmetrize<SymKind::kStep>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, P.data(), ld, nullptr,
-                               ld, h);
+    SymmetricStage(terms(d1), SymmetricUpdate::kStep, P.data(), ld, nullptr, 0, h);
     p += h * e1;
     if (separate_lambda) lam += h * l1;
   } else {
@@ -617,49 +670,153 @@ void BackwardPass::IntegrateStep(int k, int n, double h, int s, bool store, doub
     auto e3 = dp_[3].head(nz);
     auto l2 = dlam_[2].head(nz);
     auto l3 = dlam_[3].head(nz);
-    Symmetrize<SymKind::kStore>(nz, n, d1.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d1.data(),
-                                ld, 0.0);
-    Ps = P + (0.5 * h) * d1;
+    SymmetricStage(terms(d1), SymmetricUpdate::kRk4Stage, P.data(), ld, Ps.data(), ld, 0.5 * h);
     ps = p + (0.5 * h) * e1;
     if (separate_lambda) lams = lam + (0.5 * h) * l1;
     Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d2, e2, l2, false, s);
-    Symmetrize<SymKind::kStore>(nz, n, d2.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d2.data(),
-                                ld, 0.0);
-    Ps = P + h * d2;
+    SymmetricStage(terms(d2), SymmetricUpdate::kRk4Stage, P.data(), ld, Ps.data(), ld, h);
     ps = p + h * e2;
     if (separate_lambda) lams = lam + h * l2;
     Derivative(k, n, Ps, ps, separate_lambda ? lams : ps, d3, e3, l3, false, s);
-    Symmetrize<SymKind::kStore>(nz, n, d3.data(), ld, lxx, ldl, D, R(), ldr, nullptr, ld, d3.data(),
-                                ld, 0.0);
-    P += (h / 6.0) * (d0 + 2.0 * d1 + 2.0 * d2 + d3);
+    SymmetricStage(terms(d3), SymmetricUpdate::kRk4Final, P.data(), ld, nullptr, 0, h / 6.0,
+                   d0.data(), d1.data(), d2.data(), ld);
     p += (h / 6.0) * (e0 + 2.0 * e1 + 2.0 * e2 + e3);
     if (separate_lambda) lam += (h / 6.0) * (l0 + 2.0 * l1 + 2.0 * l2 + l3);
   }
   if (!separate_lambda) lam = p;
 }
 
-double BackwardPass::RiccatiStiffnessBound(int n, const ConstMatrixRef& P) const {
-  // |A_cl|_inf <= |D f_x|_inf + |F_u|_inf |H^-1|_inf (|F_u^T|_inf |P_xx|_inf + |L_ux|_inf).
-  const auto fu = c_.fu.topRows(n);
-  const double fx = c_.fx.topLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
-  const double fu_inf = fu.cwiseAbs().rowwise().sum().maxCoeff();
-  const double fu_1 = fu.cwiseAbs().colwise().sum().maxCoeff();
-  const double p_inf = P.topLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
-  const double h_inf = c_.Hinv.cwiseAbs().rowwise().sum().maxCoeff();
-  const double lux = c_.lux.leftCols(n).cwiseAbs().rowwise().sum().maxCoeff();
-  return fx + fu_inf * h_inf * (fu_1 * p_inf + lux);
-}
-
-double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P) {
-  auto gain = stiff_gain_.leftCols(n);
+double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P, double limit) {
+  // A bound on the eigenvalues of the closed loop A_cl = D f_x - F_u H_FF^-1 G, G = F_u^T P_xx +
+  // L_ux. An explicit Runge-Kutta step commutes with a change of coordinates z -> S z, so its
+  // stability and accuracy are those of S^-1 A_cl S for any S: with S diagonal,
+  // |S^-1 A_cl S|_inf >= max |lambda_i| bounds the eigenvalues as |A_cl|_inf does, and can be
+  // far smaller on a badly scaled system (the hopper's angles against its N/m stiffness
+  // commands: ~20 against ~1000, eigenvalues ~5-8, in tau units). S is this mode's from the
+  // last balancing (Osborne's iteration in powers of 2, as LAPACK's dgebal), balanced again
+  // only when the bound exceeds `limit`. Cheap first: |S^-1 A_cl S| <= |S^-1 D f_x S| +
+  // |S^-1 F_u| |H_FF^-1| |G S|, with the nonzero patterns of D f_x and F_u.
+  const int m = m_;
+  const double* d = stiff_scale_.data();
+  const internal::ColumnPattern& fx_nz = sparsity_->fx;
+  const internal::ColumnPattern& fu_nz = sparsity_->fu;
+  auto gain = stiff_gain_.leftCols(n);  // m x n: G
+  for (int c = 0; c < n; ++c) {
+    const double* pc = P.data() + static_cast<Eigen::Index>(c) * P.outerStride();
+    for (int i = 0; i < m; ++i) {
+      double t = c_.lux(i, c);
+      for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
+        const int l = fu_nz.rows[q];
+        t += c_.fu(l, i) * pc[l];  // P_xx(l, c) = P_xx(c, l) up to rounding
+      }
+      gain(i, c) = t;
+    }
+  }
+  auto row = stiff_rows_.col(0).head(n);  // row sums of |D f_x S|
+  row.setZero();
+  for (int c = 0; c < n; ++c) {
+    for (int q = fx_nz.start[c]; q < fx_nz.start[c + 1]; ++q) {
+      const int l = fx_nz.rows[q];
+      row(l) += std::abs(c_.fx(l, c)) * d[c];
+    }
+  }
+  double fx_norm = 0.0, fu_norm = 0.0;
+  auto fu_row = stiff_rows_.col(1).head(n);  // row sums of |F_u|
+  fu_row.setZero();
+  for (int i = 0; i < m; ++i) {
+    for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
+      fu_row(fu_nz.rows[q]) += std::abs(c_.fu(fu_nz.rows[q], i));
+    }
+  }
+  for (int l = 0; l < n; ++l) {
+    fx_norm = std::max(fx_norm, row(l) / d[l]);
+    fu_norm = std::max(fu_norm, fu_row(l) / d[l]);
+  }
+  double h_norm = 0.0, g_norm = 0.0;
+  for (int i = 0; i < m; ++i) {
+    double hr = 0.0, gr = 0.0;
+    for (int j = 0; j < m; ++j) hr += std::abs(c_.Hinv(i, j));
+    for (int c = 0; c < n; ++c) gr += std::abs(gain(i, c)) * d[c];
+    h_norm = std::max(h_norm, hr);
+    g_norm = std::max(g_norm, gr);
+  }
+  const double bound = fx_norm + fu_norm * h_norm * g_norm;
+  if (bound <= limit || !std::isfinite(bound)) return bound;
+  // The closed loop itself, scaled: B = S^-1 A_cl S.
+  auto kx = stiff_k_.leftCols(n);  // m x n: H_FF^-1 G
+  for (int c = 0; c < n; ++c) {
+    for (int i = 0; i < m; ++i) {
+      double t = 0.0;
+      for (int j = 0; j < m; ++j) t += c_.Hinv(i, j) * gain(j, c);
+      kx(i, c) = t;
+    }
+  }
   auto acl = stiff_acl_.topLeftCorner(n, n);
-  gain = c_.lux.leftCols(n);
-  gain.noalias() += c_.fu.topRows(n).transpose() * P.topLeftCorner(n, n);
-  auto kx = stiff_k_.leftCols(n);
-  kx.noalias() = c_.Hinv * gain;
   acl = c_.fx.topLeftCorner(n, n);
-  acl.noalias() -= c_.fu.topRows(n) * kx;
-  return acl.cwiseAbs().rowwise().sum().maxCoeff();
+  for (int i = 0; i < m; ++i) {
+    for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
+      const int l = fu_nz.rows[q];
+      const double a = c_.fu(l, i);
+      for (int c = 0; c < n; ++c) acl(l, c) -= a * kx(i, c);
+    }
+  }
+  double* a = acl.data();
+  const Eigen::Index lda = acl.outerStride();
+  row.setZero();  // row sums of |A_cl S|
+  for (int c = 0; c < n; ++c) {
+    for (int r = 0; r < n; ++r) row(r) += std::abs(a[c * lda + r]) * d[c];
+  }
+  double scaled = 0.0;
+  for (int r = 0; r < n; ++r) scaled = std::max(scaled, row(r) / d[r]);
+  if (scaled <= limit || !std::isfinite(scaled)) return scaled;
+  for (int c = 0; c < n; ++c) {
+    for (int r = 0; r < n; ++r) a[c * lda + r] *= d[c] / d[r];
+  }
+  auto norm_inf = [&]() {
+    double norm = 0.0;
+    for (int r = 0; r < n; ++r) {
+      double sum = 0.0;
+      for (int c = 0; c < n; ++c) sum += std::abs(a[c * lda + r]);
+      norm = std::max(norm, sum);
+    }
+    return norm;
+  };
+  // Balance B in place from the current S (S's entries stay powers of 2 times the last S's).
+  double* dm = stiff_scale_.data();
+  for (int sweep = 0; sweep < 10; ++sweep) {
+    bool changed = false;
+    for (int i = 0; i < n; ++i) {
+      double col = 0.0, rw = 0.0;
+      for (int j = 0; j < n; ++j) {
+        if (j == i) continue;
+        col += std::abs(a[i * lda + j]);
+        rw += std::abs(a[j * lda + i]);
+      }
+      if (!(col > 0.0) || !(rw > 0.0) || !std::isfinite(col + rw)) continue;
+      const double before = col + rw;
+      double f = 1.0;
+      while (col < 0.5 * rw) {
+        col *= 2.0;
+        rw *= 0.5;
+        f *= 2.0;
+      }
+      while (col >= 2.0 * rw) {
+        col *= 0.5;
+        rw *= 2.0;
+        f *= 0.5;
+      }
+      if (col + rw < 0.95 * before) {  // column i times f, row i divided by f: S_ii *= f
+        changed = true;
+        dm[i] *= f;
+        for (int j = 0; j < n; ++j) {
+          a[i * lda + j] *= f;
+          a[j * lda + i] /= f;
+        }
+      }
+    }
+    if (!changed) break;
+  }
+  return norm_inf();
 }
 
 bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool cyclic) {
@@ -674,6 +831,7 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
     StoreState(k, N - 1);
     auto P = P_.topLeftCorner(nz, nz);
     auto p = p_.head(nz);
+    stiff_scale_.setOnes();  // each mode balances from S = I (RiccatiStiffness)
     for (int j = N - 2; j >= 0; --j) {
       const int s = index(k, j);
       Evaluate(k, nominal, j, du_prev);
@@ -690,11 +848,13 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       if (riccati && m_ > 0 && h > 0 && settings_.max_substeps > 1) {
         // The exact |A_cl|_inf (an n x n x m product) only where the cheap bound allows
         // stiffness.
-        const double stiff = h * RiccatiStiffnessBound(n, P) > 1.0 ? RiccatiStiffness(n, P) : 0.0;
+        const double stiff = RiccatiStiffness(n, P, 1.0 / h);
         if (h * stiff > 1.0) {
           substeps = static_cast<int>(std::min<double>(settings_.max_substeps, std::ceil(h * stiff)));
         }
       }
+      substeps = std::max(substeps, settings_.min_substeps);
+      substeps_ += substeps;
       for (int sub = 0; sub < substeps; ++sub) {
         IntegrateStep(k, n, h / substeps, s, sub == substeps / 2, h);
       }
@@ -720,6 +880,7 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
   }
   mu_ = regularization;
   luu_scale_ = 0;
+  substeps_ = 0;
   // Allocation-free structural checks (the full validation is the caller's job).
   if (nominal.num_modes() != K_ || nominal.T.size() != K_) {
     throw InvalidArgument("BackwardPass::Run: trajectory has " +

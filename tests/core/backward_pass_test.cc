@@ -4,6 +4,7 @@
 // finite differences of the true (simulated) cost, the du_prev driving term, no allocation.
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <gtest/gtest.h>
 
@@ -483,6 +484,97 @@ TEST(BackwardPass, StiffRiccatiIsSubStepped) {
   EXPECT_GT(single, 1.0);
 }
 
+// A two-state LQ problem (one mode, the nominal at rest) and the same problem in the
+// coordinates x = S z with S = diag(1, scale): A' = S A S^-1, B' = S B, Q' = S^-T Q S^-1, the
+// terminal weight alike. The Riccati pass is covariant (P' = S^-T P S^-1) and so is every
+// explicit Runge-Kutta step, so the scaled pass needs the sub-steps of the unscaled one; its
+// closed loop's |A_cl|_inf is ~scale times larger, its eigenvalues are the same.
+struct ScaledLq {
+  Matrix A = (Matrix(2, 2) << 0.0, 1.0, -2.0, -0.5).finished();
+  Matrix B = (Matrix(2, 1) << 0.0, 1.0).finished();
+  Matrix Q = Matrix::Identity(2, 2), S_T = Matrix::Identity(2, 2);
+  double r = 0.1, T = 2.0;
+  int N = 101;
+  struct Posed {
+    LinearSwitchedSystem sys;
+    QuadraticCost cost;
+    Problem problem;
+    Trajectory traj;
+    Posed(const Matrix& A, const Matrix& B, const Matrix& Q, const Matrix& R, const Matrix& S_T,
+          double T, int N)
+        : sys({A}, {B}, {Matrix::Identity(2, 2)}),
+          cost({Q}, {R}, {0.0}, {S_T}, {Vector::Zero(2)}) {
+      problem.system = &sys;
+      problem.cost = &cost;
+      problem.bounds.u_min = Vector::Constant(1, -std::numeric_limits<double>::infinity());
+      problem.bounds.u_max = Vector::Constant(1, std::numeric_limits<double>::infinity());
+      problem.bounds.duration_min = Vector::Constant(1, 0.1);
+      problem.bounds.duration_max = Vector::Constant(1, 5);
+      problem.surface_weights = Vector::Zero(1);
+      traj.modes.resize(1);
+      traj.modes[0].t = Vector::LinSpaced(N, 0.0, T);
+      traj.modes[0].x = Matrix::Zero(2, N);
+      traj.modes[0].u = Matrix::Zero(1, N);
+      traj.T = Vector::Constant(1, T);
+      traj.x0 = Vector::Zero(2);
+    }
+  };
+  std::unique_ptr<Posed> Pose(double scale) const {
+    const Matrix S = Eigen::Vector2d(1.0, scale).asDiagonal();
+    const Matrix Si = S.inverse();
+    return std::make_unique<Posed>(S * A * Si, S * B, Si.transpose() * Q * Si,
+                                   Matrix::Constant(1, 1, r), Si.transpose() * S_T * Si, T, N);
+  }
+  static BackwardPassSettings Settings(int min_substeps = 1) {
+    BackwardPassSettings s;
+    s.equation = BackwardEquation::kRiccati;
+    s.integrator = BackwardIntegrator::kRk4;
+    s.keep_P_trajectory = true;
+    s.min_substeps = min_substeps;
+    return s;
+  }
+};
+
+TEST(BackwardPass, SubStepsDoNotDependOnTheCoordinates) {
+  for (const double r : {0.1, 1e-3}) {  // the closed loop's eigenvalues up to ~3 and ~1000 /s
+    ScaledLq lq;
+    lq.r = r;
+    const auto plain = lq.Pose(1.0);
+    const auto scaled = lq.Pose(1e-4);
+    BackwardPass a, b, ref;
+    a.Allocate(plain->problem, lq.N, ScaledLq::Settings());
+    b.Allocate(scaled->problem, lq.N, ScaledLq::Settings());
+    ref.Allocate(scaled->problem, lq.N, ScaledLq::Settings(256));
+    ASSERT_TRUE(a.Run(plain->traj)) << static_cast<int>(a.status());
+    ASSERT_TRUE(b.Run(scaled->traj)) << static_cast<int>(b.status());
+    ASSERT_TRUE(ref.Run(scaled->traj)) << static_cast<int>(ref.status());
+    const Matrix Si = Eigen::Vector2d(1.0, 1e4).asDiagonal();
+    double e_cov = 0, e_ref = 0;
+    for (int j = 0; j < lq.N; ++j) {
+      const Matrix Pz = a.P(0, j).topLeftCorner(2, 2);
+      const Matrix Px = b.P(0, j).topLeftCorner(2, 2);
+      const Matrix Pr = ref.P(0, j).topLeftCorner(2, 2);
+      e_cov = std::max(e_cov, (Px - Si.transpose() * Pz * Si).norm() / Px.norm());
+      e_ref = std::max(e_ref, (Px - Pr).norm() / Pr.norm());
+    }
+    std::printf("r = %g: steps %ld unscaled, %ld scaled (%d intervals); |P' - S^-T P S^-1| %.2g, "
+                "against 256 sub-steps %.2g\n", r, a.substeps(), b.substeps(), lq.N - 1, e_cov,
+                e_ref);
+    EXPECT_LE(b.substeps(), a.substeps() + (lq.N - 1) / 10)
+        << "balancing recovers the unscaled sub-steps";
+    if (r == 0.1) {
+      EXPECT_EQ(a.substeps(), lq.N - 1);
+      EXPECT_EQ(b.substeps(), lq.N - 1) << "not stiff in any coordinates";
+      EXPECT_LT(e_ref, 1e-4);
+    } else {
+      EXPECT_GT(b.substeps(), lq.N - 1 + 10) << "stiff near the terminal in every coordinates";
+      EXPECT_LT(e_ref, 1e-2) << "stable (h |lambda| <= 1 per sub-step bounds stability, not "
+                                "the transient's accuracy)";
+    }
+    EXPECT_LT(e_cov, 1e-9);
+  }
+}
+
 TEST(BackwardPass, RiccatiIsBoxAware) {
   // The nominal input sits on its upper bound and the gradient pushes it out (p < -r u0 / b
   // everywhere for x0 = -1): the full step is clamped on every interval, so the clamped input
@@ -722,6 +814,34 @@ TEST(BackwardPass, CyclicValueRunDoesNotAllocateAndRejectsBadWeights) {
     BackwardPass b;
     EXPECT_THROW(b.Allocate(lq.problem, 100, settings), InvalidArgument) << bad;
   }
+}
+
+TEST(BackwardPass, ACyclicValueCanBeSeeded) {
+  CyclicLq lq;
+  const BackwardPassSettings settings = CyclicLq::Settings(1.0);
+  BackwardPass pass;
+  pass.Allocate(lq.problem, lq.traj.total_samples(), settings);
+  EXPECT_EQ(pass.cyclic_value().size(), 0) << "before a Run: from 0";
+  ASSERT_TRUE(pass.Run(lq.traj));
+  const Matrix P0 = pass.cyclic_value();
+  ASSERT_EQ(P0.rows(), 1);
+  EXPECT_EQ(P0(0, 0), pass.P(0, 0)(0, 0));
+  // A fresh pass seeded with the fixed point starts there: one sweep, the same P(0).
+  BackwardPass seeded;
+  seeded.Allocate(lq.problem, lq.traj.total_samples(), settings);
+  seeded.SeedCyclicValue(P0);
+  EXPECT_EQ(seeded.cyclic_value(), P0);
+  ASSERT_TRUE(seeded.Run(lq.traj));
+  EXPECT_EQ(seeded.sweeps(), 1);
+  EXPECT_NEAR(seeded.P(0, 0)(0, 0), P0(0, 0), 1e-4 * P0(0, 0));
+  // Bad seeds are named.
+  EXPECT_THROW(seeded.SeedCyclicValue(Matrix::Zero(2, 2)), InvalidArgument);
+  EXPECT_THROW(seeded.SeedCyclicValue(Matrix::Constant(1, 1, std::nan(""))), InvalidArgument);
+  BackwardPass unallocated;
+  EXPECT_THROW(unallocated.SeedCyclicValue(P0), InvalidArgument);
+  BackwardPassSettings bad = settings;
+  bad.min_substeps = 0;
+  EXPECT_THROW(unallocated.Allocate(lq.problem, 100, bad), InvalidArgument);
 }
 
 TEST(BackwardPass, KeepsPOnlyAtModeEndsUnlessAsked) {

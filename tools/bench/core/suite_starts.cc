@@ -7,7 +7,8 @@
 // switching instants (a converged run may sit on another stationary point of a nonconvex problem).
 //
 //   suite_starts [--starts 12] [--seed 7] [--preset default|paper] [--max-trials 100]
-//                [--only NAME] [--curvature-scale-min S] [--duration-min D] [--verbose]
+//                [--only NAME] [--curvature-scale-min S] [--duration-min D] [--failure-raises N]
+//                [--verbose]
 //
 // --verbose prints every start on stderr: its durations and input offset, the status, the
 // trials, the cost against I* and the switching instants against T*, and the final durations.
@@ -80,7 +81,7 @@ Tally RunStarts(const std::string& name, int starts, std::mt19937* rng,
 
 int Main(int argc, char** argv) {
   CLI::App app("The standard problems from random starts");
-  int starts = 12, seed = 7, max_trials = 100;
+  int starts = 12, seed = 7, max_trials = 100, failure_raises = -1;
   double curvature_scale_min = 1, duration_min = -1;
   std::string preset = "default", only;
   bool verbose = false;
@@ -103,11 +104,15 @@ int Main(int argc, char** argv) {
                  "Bounds::duration_min of every mode on the problems with K > 1 (s; default: the "
                  "suite's 0.01; 0 lets a mode vanish)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--failure-raises", failure_raises,
+                 "LearnerSettings::failure_raises (default: the preset's)")
+      ->check(CLI::NonNegativeNumber);
   app.add_flag("--verbose", verbose, "every start on stderr");
   CLI11_PARSE(app, argc, argv);
   LearnerSettings settings = preset == "paper" ? LearnerSettings::Paper() : LearnerSettings{};
   settings.max_trials = max_trials;
   if (curvature->count() > 0) settings.curvature_scale_min = curvature_scale_min;
+  if (failure_raises >= 0) settings.failure_raises = failure_raises;
   std::mt19937 rng(static_cast<unsigned>(seed));
   std::printf("| problem | converged | at the reference | stuck | trials (mean, max) |\n"
               "|---|---|---|---|---|\n");
