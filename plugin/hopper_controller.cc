@@ -65,6 +65,7 @@ ModelPlantSettings ModelPlantSettingsFor(const ControllerConfig& c) {
 struct InitialLaw {
   double cost = 0.0;
   int iterations = 0;
+  Matrix cyclic_value;  // the model solve's (BackwardPass::cyclic_value()), or the stored one
   std::string status = "solved";
   bool trouble = false;
 };
@@ -102,6 +103,7 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
       cost->SetReference(gait->x0);  // as SolveFromGait leaves it
       out.cost = stored.model_cost;
       out.iterations = stored.model_iterations;
+      out.cyclic_value = stored.cyclic_value;
       out.status = "loaded " + path;
       return out;
     }
@@ -118,11 +120,13 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
     throw InvalidArgument("the model-based initial solve produced a non-finite cost");
   }
   *law = model_learner.ConvergedPolicy(config.ocfb_alpha);
+  out.cyclic_value = model_learner.backward_pass().cyclic_value();
   if (key.empty()) return out;
   StoredInitialLaw stored;
   stored.law = law->ExportLaw();
   stored.model_cost = out.cost;
   stored.model_iterations = out.iterations;
+  stored.cyclic_value = out.cyclic_value;
   std::string why;
   if (WriteInitialLaw(config.law_cache, key, stored, &why)) {
     out.status = "stored " + InitialLawPath(config.law_cache, key) + unusable;
@@ -186,6 +190,7 @@ void HopperController::Initialize() {
       SolveInitialLaw(config_, problem_, &model_plant_, &cost_, &fallback_, &gait_);
   model_cost_ = u0.cost;
   model_iterations_ = u0.iterations;
+  cyclic_value_ = u0.cyclic_value;
   law_cache_status_ = u0.status;
   law_cache_trouble_ = u0.trouble;
   bridge_ = fallback_;
@@ -209,6 +214,8 @@ void HopperController::MakeDriver(int warmup) {
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
       HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
+  // The Initialize hop's pass sweeps its periodic value from u^0's fixed point on the model.
+  driver_->SeedCyclicValue(cyclic_value_);
 }
 
 void HopperController::ResolveModel(double mass) {
@@ -233,6 +240,7 @@ void HopperController::ResolveModel(double mass) {
   staged_.params = config.model;
   staged_.cost = u0.cost;
   staged_.iterations = u0.iterations;
+  staged_.cyclic_value = u0.cyclic_value;
   staged_.ready = true;
   staged_.record = ModelResolve();
   staged_.record.hop = job_hop_;
@@ -249,6 +257,7 @@ void HopperController::TakeOverResolvedModel() {
   bridge_ = fallback_;
   model_cost_ = staged_.cost;
   model_iterations_ = staged_.iterations;
+  cyclic_value_ = staged_.cyclic_value;
   staged_.ready = false;
   resolves_.back().took_over_hop = hop_;
   // The running hop is the new driver's trial 0, settle_hops whole hops follow, then its

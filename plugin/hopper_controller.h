@@ -238,6 +238,7 @@ class HopperController {
   HopperPredictionPlant prediction_plant_{&model_plant_};  // mRL's direction plant
   NominalGait gait_;
   OnlineController fallback_;  // u^0, the OC-FB law of the model solve (the driver's fallback)
+  Matrix cyclic_value_;        // u^0's model solve's cyclic value: the drivers' learners' seed
   OnlineController bridge_;    // a copy of u^0 that runs while the offline part works
   std::unique_ptr<TrialDriver> driver_;
   double model_cost_ = 0.0;
@@ -256,6 +257,7 @@ class HopperController {
     OnlineController law;
     double cost = 0.0;
     int iterations = 0;
+    Matrix cyclic_value;
     ModelResolve record;  // resolves_ gets it on the simulation side (TakeOfflineResult)
   } staged_;
   std::vector<ModelResolve> resolves_;

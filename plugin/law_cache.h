@@ -22,6 +22,9 @@ struct StoredInitialLaw {
   OnlineControllerLaw law;   ///< u^0 = Learner::ConvergedPolicy(ocfb_alpha) of the model solve
   double model_cost = 0.0;   ///< converged OC-FB cost on the model
   int model_iterations = 0;  ///< trials of the model solve
+  /// The model solve's cyclic value (BackwardPass::cyclic_value(), n_0 x n_0; empty: none),
+  /// which the robot learner's first pass starts from.
+  Matrix cyclic_value;
 };
 
 /// The text that identifies u^0: every ControllerConfig field the model solve reads (doubles as

@@ -312,6 +312,10 @@ class Learner {
   /// The law that produced the initial nominal (u^0), for blend_feedback before the first
   /// accepted trial; nullptr (default): no blend until then. It must stay loaded while used.
   void SetInitialLaw(const OnlineController* law) { initial_law_ = law; }
+  /// The first pass's cyclic value starts from `P0` instead of 0 (BackwardPass::SeedCyclicValue;
+  /// e.g. the model solve's backward_pass().cyclic_value() of the law u^0 that makes the initial
+  /// nominal). Throws InvalidArgument on a wrong size or a non-finite entry.
+  void SeedCyclicValue(const Matrix& P0) { pass_.SeedCyclicValue(P0); }
 
   /// Batch Algorithm 1 / mRL / OC-FB from a fixed initial state: runs `initial_policy` on both
   /// plants, then trials until convergence, line-search failure or max_trials. Pass the same

@@ -135,6 +135,11 @@ class TrialDriver {
 
   /// Restarts from trial 0 with u^0 and a fresh learner; unfreezes. Allocates.
   void Reset();
+  /// The learner's first pass (and every fresh learner's after Reset) starts its cyclic value
+  /// from `P0` (Learner::SeedCyclicValue): u^0's, from the model solve that produced it; an
+  /// empty matrix: fresh learners start from 0. Throws InvalidArgument on a wrong size or a
+  /// non-finite entry (checked when there is a learner).
+  void SeedCyclicValue(const Matrix& P0);
 
   /// The law of the current trial.
   Policy& law() { return *law_; }
@@ -182,6 +187,7 @@ class TrialDriver {
   Plant* prediction_;
   CostReference reference_;
   std::unique_ptr<Learner> learner_;  // null for OC-FB
+  Matrix cyclic_seed_;                // SeedCyclicValue's P0 (empty: none)
   Policy* law_ = nullptr;             // the law of the current trial
   OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
   int trial_ = 0;

@@ -52,6 +52,7 @@ void TrialDriver::Reset() {
     learner_ = std::make_unique<Learner>(*problem_, settings_.learner);
     // blend_feedback before the first accepted trial: u^0's own feedback, when it has one.
     learner_->SetInitialLaw(dynamic_cast<const OnlineController*>(fallback_));
+    if (cyclic_seed_.size() > 0) learner_->SeedCyclicValue(cyclic_seed_);
   }
   trial_ = 0;
   frozen_ = false;
@@ -69,6 +70,11 @@ void TrialDriver::Reset() {
   pending_law_ = nullptr;
   reverts_ = 0;
   UseFallback();
+}
+
+void TrialDriver::SeedCyclicValue(const Matrix& P0) {
+  if (P0.size() > 0 && learner_ != nullptr) learner_->SeedCyclicValue(P0);  // throws first
+  cyclic_seed_ = P0;
 }
 
 void TrialDriver::Runs::Add(double x) {

@@ -277,6 +277,25 @@ TEST_F(TrialDriverTest, OcfbRunsTheFallbackEveryTrial) {
   EXPECT_EQ(&driver.law(), &fallback);
 }
 
+TEST_F(TrialDriverTest, ASeededCyclicValueReachesEveryFreshLearner) {
+  // The seed (u^0's model solve's cyclic value) is where the learner's first pass starts, for
+  // the driver's learner and for the fresh one of every Reset; a wrong size is named.
+  TrialDriver driver(p.problem, DriverSettings(Method::kAlg1), fallback);
+  const int n0 = p.problem.system->state_dim(0);
+  const Matrix seed = Matrix::Identity(n0, n0) * 3.0;
+  driver.SeedCyclicValue(seed);
+  ASSERT_NE(driver.learner(), nullptr);
+  EXPECT_TRUE(driver.learner()->backward_pass().cyclic_value() == seed);
+  driver.Reset();
+  EXPECT_TRUE(driver.learner()->backward_pass().cyclic_value() == seed);
+  EXPECT_THROW(driver.SeedCyclicValue(Matrix::Identity(n0 + 1, n0 + 1)), InvalidArgument);
+  driver.SeedCyclicValue(Matrix());  // no seed: fresh learners start from 0
+  driver.Reset();
+  EXPECT_EQ(driver.learner()->backward_pass().cyclic_value().size(), 0);
+  TrialDriver ocfb(p.problem, DriverSettings(Method::kOcfb), fallback);
+  EXPECT_NO_THROW(ocfb.SeedCyclicValue(seed));  // no learner: nothing to seed
+}
+
 TEST_F(TrialDriverTest, BadSettingsAreNamed) {
   TrialDriverSettings zero = DriverSettings(Method::kAlg1);
   zero.warmup_trials = 0;

@@ -97,6 +97,14 @@ TEST_F(LawCacheTest, ALoadedLawRunsBitwiseLikeTheSolvedOne) {
   EXPECT_EQ(loaded.costs, solved.costs);
   EXPECT_EQ(loaded.ctrl.size(), solved.ctrl.size());
   EXPECT_TRUE(loaded.ctrl == solved.ctrl) << "the inputs differ";
+  // The file holds the model solve's cyclic value (n_0 = 14, the flight state), which the
+  // robot learner's first pass starts from whether u^0 was solved or loaded.
+  StoredInitialLaw stored;
+  std::string why;
+  ASSERT_TRUE(ReadInitialLaw(dir_.string(), InitialLawKey(Config()), &stored, &why)) << why;
+  EXPECT_EQ(stored.cyclic_value.rows(), 14);
+  EXPECT_EQ(stored.cyclic_value.cols(), 14);
+  EXPECT_GT(stored.cyclic_value.norm(), 0.0);
 }
 
 TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
@@ -205,7 +213,31 @@ StoredInitialLaw TinyLaw() {
   for (Matrix* a : {&s.law.x, &s.law.u, &s.law.Kx, &s.law.c, &s.law.huu}) *a = Matrix::Ones(1, 4);
   s.model_cost = 1.5;
   s.model_iterations = 3;
+  s.cyclic_value = Matrix::Constant(1, 1, 2.5);
   return s;
+}
+
+TEST_F(LawCacheTest, TheModelSolvesCyclicValueIsStoredWithTheLaw) {
+  // Format 2: the cyclic value after the law, which the robot learner's first pass starts from;
+  // a law without one (n_0 = 0) reads back as an empty matrix, a wrong size is named.
+  StoredInitialLaw tiny = TinyLaw();
+  for (const Matrix& P0 : {Matrix(Matrix::Constant(1, 1, 2.5)), Matrix()}) {
+    tiny.cyclic_value = P0;
+    const std::string file = SerializeInitialLaw("key", tiny);
+    StoredInitialLaw back;
+    std::string why;
+    ASSERT_TRUE(ParseInitialLaw(file, "key", &back, &why)) << why;
+    EXPECT_EQ(back.cyclic_value.rows(), P0.rows());
+    EXPECT_TRUE(back.cyclic_value == P0);
+  }
+  tiny.cyclic_value = Matrix::Constant(2, 2, 1.0);  // more than n_max = 1 allows
+  StoredInitialLaw back;
+  std::string why;
+  EXPECT_FALSE(ParseInitialLaw(SerializeInitialLaw("key", tiny), "key", &back, &why));
+  EXPECT_EQ(why, "array sizes do not match the file length");
+  tiny.cyclic_value = Matrix::Constant(1, 1, std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(ParseInitialLaw(SerializeInitialLaw("key", tiny), "key", &back, &why));
+  EXPECT_EQ(why, "non-finite cyclic value");
 }
 
 TEST_F(LawCacheTest, ADirectoryKeepsTheMostRecentlyUsedLaws) {

@@ -62,7 +62,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (law.tau.size() != S || law.u.cols() != S || law.x.cols() != S || law.Kx.cols() != S ||
       law.c.cols() != S || law.huu.cols() != S ||
       law.Kx.rows() != law.u.rows() * law.x.rows() ||
-      law.huu.rows() != law.u.rows() * law.u.rows() || !std::isfinite(stored.model_cost)) {
+      law.huu.rows() != law.u.rows() * law.u.rows() || !std::isfinite(stored.model_cost) ||
+      stored.cyclic_value.rows() != stored.cyclic_value.cols() ||
+      stored.cyclic_value.rows() > law.x.rows() || !stored.cyclic_value.allFinite()) {
     std::abort();  // the parser accepted inconsistent sizes
   }
   ddoc::OnlineController controller;
