@@ -64,8 +64,12 @@ struct HopReport {
   /// to it).
   double offline_ms = std::numeric_limits<double>::quiet_NaN();
   /// Simulated time from the hop's end until the law learned from it took effect, ms: the
-  /// configured offline_latency, or with measured_latency max(it, offline_ms) (NaN: no law).
+  /// configured offline_latency, with modeled_latency at least the model's time for
+  /// offline_steps, with measured_latency at least offline_ms (NaN: no law).
   double latency_ms = std::numeric_limits<double>::quiet_NaN();
+  /// Integration steps of the backward passes in the offline part of this hop (0: none; -1: the
+  /// hop was not handed to it).
+  long offline_steps = -1;
 };
 
 /// One re-solve of u^0 on an identified model (IdentificationSettings).

@@ -30,6 +30,12 @@ void ValidateConfig(const ControllerConfig& c) {
   if (c.max_samples_per_mode < 10) {
     fail("max_samples_per_mode", c.max_samples_per_mode, ">= 10");
   }
+  if (!(c.offline_hop_seconds >= 0.0) || !std::isfinite(c.offline_hop_seconds)) {
+    fail("offline_hop_seconds", c.offline_hop_seconds, "finite and >= 0");
+  }
+  if (!(c.offline_step_seconds >= 0.0) || !std::isfinite(c.offline_step_seconds)) {
+    fail("offline_step_seconds", c.offline_step_seconds, "finite and >= 0");
+  }
   if (c.measured_latency) {
     // A law that comes after the flight waits for the next one (DeployLawWhenDue).
     if (!(c.offline_latency >= 0.0) || !std::isfinite(c.offline_latency)) {
@@ -607,6 +613,7 @@ void HopperController::EndHop(double t, const FlightState14& x) {
 void HopperController::RunOffline() {
   if (job_.load(std::memory_order_acquire) != Job::kPosted) return;
   const auto start = std::chrono::steady_clock::now();
+  const long steps = driver_->integration_steps();
   try {
     recorders_[1 - recording_].Finish(&trial_);
     outcome_ = driver_->CompleteTrial(trial_);
@@ -625,6 +632,7 @@ void HopperController::RunOffline() {
   }
   offline_seconds_ =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  offline_steps_ = driver_->integration_steps() - steps;
   job_.store(Job::kDone, std::memory_order_release);
   if (!worker_.joinable()) TakeOfflineResult();
 }
@@ -635,8 +643,14 @@ void HopperController::TakeOfflineResult() {
     failed_ = true;
     error_ = offline_error_;
   }
-  // measured_latency: the law takes effect no sooner than this computer produced it.
+  // The law takes effect no sooner than the latency model's computer (modeled_latency) or this
+  // one (measured_latency) produced it.
   double latency = config_.offline_latency;
+  if (config_.modeled_latency && !Synchronous()) {
+    latency = std::max(latency, config_.offline_hop_seconds +
+                                    config_.offline_step_seconds *
+                                        static_cast<double>(offline_steps_));
+  }
   if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
   if (!std::isnan(job_resolve_) && staged_.ready) {  // this hop re-solved u^0: it takes over
     resolves_.push_back(staged_.record);
@@ -648,6 +662,7 @@ void HopperController::TakeOfflineResult() {
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;
     w.report.offline_ms = 1e3 * offline_seconds_;
+    w.report.offline_steps = offline_steps_;
     if (law_pending_) w.report.latency_ms = 1e3 * latency;
     w.report.accepted = outcome_.accepted;
     w.report.learner_cost = outcome_.cost;

@@ -92,6 +92,17 @@ struct ControllerConfig {
   /// computer) after the hop, and never outside a flight (a hop that ends first is not learned
   /// from): offline_latency="measured". Default false. docs/design.md, "Honest latency".
   bool measured_latency = false;
+  /// true (default): the law takes effect max(offline_latency, the latency model's time for the
+  /// hop's offline part) after the hop, never outside a flight (as measured_latency, but
+  /// deterministic); false with measured_latency false: offline_latency, fixed. Off in the
+  /// synchronous mode (offline_latency 0). docs/design.md, "Honest latency".
+  bool modeled_latency = true;
+  /// The latency model's robot computer: a hop's offline part takes offline_hop_seconds +
+  /// offline_step_seconds x the backward passes' integration steps in it
+  /// (TrialDriver::integration_steps). Defaults 1 ms and 3.6 us: the thread CPU time of the
+  /// offline parts on this project's build machine (AMD EPYC, one core; docs/design.md).
+  double offline_hop_seconds = 1e-3;
+  double offline_step_seconds = 3.6e-6;
   /// true: the offline part runs on a worker thread (as on a robot); false: in RunOffline().
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
@@ -315,6 +326,7 @@ class HopperController {
   double law_due_ = 0.0;
   double job_end_ = 0.0;                // simulated time of the handed-over hop's end, s
   double offline_seconds_ = 0.0;        // wall time of the last offline part, s
+  long offline_steps_ = 0;              // the backward passes' integration steps in it
   std::thread worker_;
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;

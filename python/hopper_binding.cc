@@ -71,6 +71,7 @@ const HopColumn kHopColumns[] = {
     {"model_mass", false, [](const HopReport& h) { return h.model_mass; }},
     {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
     {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
+    {"offline_steps", true, [](const HopReport& h) { return static_cast<double>(h.offline_steps); }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 
@@ -247,18 +248,20 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   for (const py::handle item : pushes) overrides.pushes.push_back(PushText(item, index++));
   overrides.no_pushes = no_pushes;
   overrides.preset = preset;
-  // A number of s, or "measured" (ControllerConfig::measured_latency).
+  // "modeled" (the default), "measured" (ControllerConfig::measured_latency), or a number of s
+  // (fixed).
   if (py::isinstance<py::str>(offline_latency)) {
     const std::string text = offline_latency.cast<std::string>();
-    if (text != "measured") {
-      throw py::value_error("offline_latency \"" + text + "\": expected a number of s or \"measured\"");
+    if (text != "measured" && text != "modeled") {
+      throw py::value_error("offline_latency \"" + text +
+                            "\": expected a number of s, \"modeled\" or \"measured\"");
     }
-    overrides.measured_latency = true;
+    overrides.measured_latency = text == "measured";
   } else if (!offline_latency.is_none()) {
     try {
       overrides.offline_latency = offline_latency.cast<double>();
     } catch (const py::cast_error&) {
-      throw py::value_error("offline_latency: expected a number of s or \"measured\", got " +
+      throw py::value_error("offline_latency: expected a number of s, \"modeled\" or \"measured\", got " +
                             py::repr(offline_latency).cast<std::string>());
     }
   }
@@ -446,7 +449,9 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
                    string 'TIME,FORCE,DURATION' / 'HOP@PHASE,FORCE,DURATION'
   no_pushes        drop the scenario's pushes (--no-pushes)
   preset           "default" | "paper" | "identified" (--preset)
-  offline_latency  s, or "measured": max(0.02 s, this computer's offline time) (--offline-latency)
+  offline_latency  "modeled" (default): max(0.02 s, the latency model's time for the hop's
+                   offline part); "measured": max(0.02 s, this computer's offline time); or s,
+                   fixed (--offline-latency)
   log_every        keep every N-th physics step in the trajectory (--log-every; 0: none)
   progress         called after every hop with that hop's row (a dict of the table's columns);
                    an exception raised in it ends the run and propagates, but a

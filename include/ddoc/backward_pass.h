@@ -159,6 +159,9 @@ class BackwardPass {
   /// Integration steps of the last Run over all its sweeps (sample intervals plus the extra
   /// sub-steps of stiff ones).
   long substeps() const { return substeps_; }
+  /// Integration steps of every Run since Allocate (the work the passes did; a run-time model's
+  /// clock, docs/design.md "Honest latency").
+  long total_substeps() const { return total_substeps_; }
   double regularization() const { return mu_; }  ///< mu of the last Run
   /// max |diag L_uu| over the intervals of the last Run (before mu; a scale for mu).
   double luu_scale() const { return luu_scale_; }
@@ -304,6 +307,7 @@ class BackwardPass {
   bool cyclic_valid_ = false;
   int sweeps_ = 0;
   long substeps_ = 0;
+  long total_substeps_ = 0;
 };
 
 }  // namespace ddoc

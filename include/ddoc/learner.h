@@ -363,6 +363,9 @@ class Learner {
   const Trajectory& nominal() const { return nominal_; }
   double nominal_cost() const { return nominal_cost_; }
   const BackwardPass& backward_pass() const { return pass_; }
+  /// Integration steps of every backward pass since construction (BackwardPass::total_substeps;
+  /// a resize by Solve starts the count again).
+  long integration_steps() const { return pass_.total_substeps(); }
   const SwitchingTimeStep& switching_step() const { return switching_step_; }
   const std::vector<double>& step_history() const { return step_history_; }
   const LearnerSettings& settings() const { return settings_; }

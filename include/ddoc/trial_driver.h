@@ -175,6 +175,8 @@ class TrialDriver {
 
   /// The learner (null for OC-FB).
   const Learner* learner() const { return learner_.get(); }
+  /// The learner's Learner::integration_steps() (0 for OC-FB): the backward passes' work.
+  long integration_steps() const { return learner_ ? learner_->integration_steps() : 0; }
   const TrialDriverSettings& settings() const { return settings_; }
 
  private:

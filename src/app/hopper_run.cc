@@ -154,17 +154,20 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
              measured_latency = true;
              return;
            }
+           if (text == "modeled") return;  // the default
            double s = 0;
            if (!ParseFiniteNumber(text, &s)) {
-             throw CLI::ValidationError("--offline-latency",
-                                        "\"" + text + "\" is neither a number of s nor measured");
+             throw CLI::ValidationError(
+                 "--offline-latency", "\"" + text + "\" is neither a number of s, modeled nor measured");
            }
            offline_latency = s;
          },
-         "simulated s from a hop's end until the law learned from it takes effect (default "
-         "0.02; 0: learn inside the control callback, synchronously), or measured: max(0.02, "
-         "the wall time of the hop's offline part on this computer)")
-      ->type_name("S|measured");
+         "simulated s from a hop's end until the law learned from it takes effect: modeled "
+         "(default): max(0.02, the latency model's time for the hop's offline part: 1 ms + 3.6 "
+         "us per integration step of its backward passes); measured: max(0.02, its wall time on "
+         "this computer); a number: that, fixed (0: learn inside the control callback, "
+         "synchronously)")
+      ->type_name("modeled|measured|S");
   user_law_cache = true;
   CLI::Option* dir = cli->add_option(
       "--law-cache", law_cache,
@@ -292,8 +295,14 @@ LoadedRun LoadRun(const std::string& scenario_path, const RunOverrides& override
   } catch (const std::exception& e) {
     throw RunError(kExitBadInput, e.what());
   }
-  if (overrides.offline_latency) run.config.offline_latency = *overrides.offline_latency;
-  if (overrides.measured_latency) run.config.measured_latency = true;
+  if (overrides.offline_latency) {
+    run.config.offline_latency = *overrides.offline_latency;
+    run.config.modeled_latency = false;
+  }
+  if (overrides.measured_latency) {  // this computer instead of the model's
+    run.config.measured_latency = true;
+    run.config.modeled_latency = false;
+  }
   run.config.law_cache = overrides.law_cache;
   if (overrides.no_law_cache) {
     run.config.law_cache.clear();

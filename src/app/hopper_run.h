@@ -79,7 +79,8 @@ struct RunOverrides {
   std::vector<std::string> pushes;       ///< --push TIME,FORCE,DURATION, added to the scenario's
   bool no_pushes = false;                ///< --no-pushes: drop the scenario's pushes
   bool substep_events = false;  ///< --substep-events: ContactPhaseSettings::substep_events on
-  std::optional<double> offline_latency;  ///< --offline-latency S (ControllerConfig)
+  /// --offline-latency S: ControllerConfig::offline_latency, fixed (modeled_latency off).
+  std::optional<double> offline_latency;
   /// --offline-latency measured: ControllerConfig::measured_latency (the floor stays 0.02 s).
   bool measured_latency = false;
   /// --preset default | paper | identified (default with --identify; overrides the scenario)

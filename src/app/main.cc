@@ -190,6 +190,9 @@ Summary ScenarioSummary(const LoadedRun& run) {
   summary.model = s.model_mjcf.empty() ? "numbers" : s.model_mjcf;
   summary.offline_latency_s = run.config.offline_latency;
   summary.offline_latency_measured = run.config.measured_latency;
+  summary.offline_latency_mode = run.config.measured_latency ? "measured"
+                                 : run.config.modeled_latency ? "modeled"
+                                                              : "fixed";
   summary.pushes = s.pushes;
   summary.hop_pushes = s.hop_pushes;
   return summary;

@@ -64,8 +64,11 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
     const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
     std::nth_element(sorted.begin(), mid, sorted.end());
     offline_median_ms = *mid;
-    // A law that this computer made later than the simulated latency (a fixed offline_latency).
+    // A law that this computer made later than the simulated latency.
     if (std::isfinite(h.latency_ms) && h.offline_ms > h.latency_ms) ++late_hops;
+  }
+  if (std::isfinite(h.latency_ms)) {
+    latency_max_ms = std::max(std::isnan(latency_max_ms) ? 0.0 : latency_max_ms, h.latency_ms);
   }
 }
 
@@ -151,6 +154,7 @@ void RunLog::WriteSummary(const Summary& s) {
   j["model"] = s.model;
   j["offline_latency_s"] = s.offline_latency_s;
   j["offline_latency_measured"] = s.offline_latency_measured;
+  j["offline_latency_mode"] = s.offline_latency_mode;
   j["initial_law"] = s.initial_law;
   j["hops"] = s.hops;
   j["fell"] = s.fell;
@@ -184,7 +188,8 @@ void RunLog::WriteSummary(const Summary& s) {
   j["wall_time_s"] = s.wall_time_s;
   j["offline_timing"] = {{"max_ms", s.offline_max_ms},
                          {"median_ms", s.offline_median_ms},
-                         {"late_hops", s.late_hops}};
+                         {"late_hops", s.late_hops},
+                         {"latency_max_ms", s.latency_max_ms}};
   j["end"] = s.end;
   j["end_message"] = s.end_message;
   j["pushes"] = nlohmann::json::array();

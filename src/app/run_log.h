@@ -47,6 +47,9 @@ struct Summary {
   std::string scenario, method, robot, model;
   double offline_latency_s = 0.0;  // ControllerConfig::offline_latency of the run
   bool offline_latency_measured = false;  // ControllerConfig::measured_latency of the run
+  // "modeled", "measured" or "fixed" (ControllerConfig::modeled_latency, measured_latency)
+  std::string offline_latency_mode = "modeled";
+  double latency_max_ms = std::nan("");  // the longest simulated latency of a learned law, ms
   // Wall-clock figures of the offline part (summary.json "offline_timing"; not deterministic):
   // its longest and median hop, and the hops whose law it made later than the simulated latency.
   double offline_max_ms = std::nan(""), offline_median_ms = std::nan("");

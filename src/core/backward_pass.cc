@@ -136,6 +136,7 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   cyclic_tmp_.setZero(n_max_, n_max_);
   cyclic_valid_ = false;
   valid_ = false;
+  total_substeps_ = 0;
 }
 
 Eigen::Map<const Matrix> BackwardPass::P(int k, int j) const {
@@ -855,6 +856,7 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       }
       substeps = std::max(substeps, settings_.min_substeps);
       substeps_ += substeps;
+      total_substeps_ += substeps;
       for (int sub = 0; sub < substeps; ++sub) {
         IntegrateStep(k, n, h / substeps, s, sub == substeps / 2, h);
       }

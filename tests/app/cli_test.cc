@@ -121,7 +121,7 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
       {good + " --hops 1e12", "--hops"},
       {good + " --log-every 0", "--log-every must be >= 1"},
       {good + " --offline-latency -1", "offline_latency"},
-      {good + " --offline-latency soon", "\"soon\" is neither a number of s nor measured"},
+      {good + " --offline-latency soon", "\"soon\" is neither a number of s, modeled nor measured"},
       {Out("fast.xml"), "no periodic gait at 5 m/s"},
       {Out("stiff.xml"), "scenario <model>: the model (M = 10, J_body = 2.5, J_leg = 1e-06"},
       {good + " --robot-variant mass=-1", "--robot-variant: mass=-1, expected > 0"},

@@ -59,6 +59,17 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   EXPECT_EQ(HopperController::Create(model.get(), bad_latency, &error), nullptr);
   EXPECT_NE(error.find("offline_latency = 0.06"), std::string::npos) << error;
 
+  for (double bad : {-1e-6, std::nan("")}) {
+    ControllerConfig bad_model_latency;
+    bad_model_latency.offline_step_seconds = bad;
+    EXPECT_EQ(HopperController::Create(model.get(), bad_model_latency, &error), nullptr);
+    EXPECT_NE(error.find("offline_step_seconds"), std::string::npos) << error;
+    bad_model_latency = ControllerConfig();
+    bad_model_latency.offline_hop_seconds = bad;
+    EXPECT_EQ(HopperController::Create(model.get(), bad_model_latency, &error), nullptr);
+    EXPECT_NE(error.find("offline_hop_seconds"), std::string::npos) << error;
+  }
+
   ControllerConfig bad_warmup;
   bad_warmup.driver.warmup_trials = 0;
   EXPECT_EQ(HopperController::Create(model.get(), bad_warmup, &error), nullptr);

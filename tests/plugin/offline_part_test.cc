@@ -119,6 +119,7 @@ TEST(OfflinePartTest, WorkerThreadGivesTheHostsResultsWhenTheHostWaits) {
 TEST(OfflinePartTest, AMeasuredLatencyIsNeverShorterThanTheOfflinePart) {
   ControllerConfig config = LearningFromHop0(1e-4);  // far below any offline part's time
   config.measured_latency = true;
+  config.modeled_latency = false;
   Robot robot("hopper_m8.xml", config, false);
   ASSERT_TRUE(robot.ok());
   HopperController& c = robot.c();
@@ -158,6 +159,7 @@ TEST(OfflinePartTest, ALawDueInStanceWaitsForTheNextFlight) {
   // Due in the middle of hop 2's stance (unless this computer's offline part is slower still).
   ControllerConfig config = LearningFromHop0(gait.period + gait.T0(0) + 0.5 * gait.stance_time);
   config.measured_latency = true;
+  config.modeled_latency = false;
   Robot robot("hopper_m8.xml", config, false);
   ASSERT_TRUE(robot.ok());
   HopperController& c = robot.c();
@@ -201,8 +203,46 @@ TEST(OfflinePartTest, ALawDueInStanceWaitsForTheNextFlight) {
   EXPECT_TRUE(std::isfinite(reports[switched_hop].learner_cost));
 }
 
+// The latency model: a hop's law takes effect max(offline_latency, offline_hop_seconds +
+// offline_step_seconds x the integration steps of its backward passes) after it, the same in
+// every run (wall time plays no part).
+TEST(OfflinePartTest, AModeledLatencyCountsTheBackwardPassesWork) {
+  ControllerConfig config = LearningFromHop0(1e-4);
+  config.offline_hop_seconds = 2e-3;
+  config.offline_step_seconds = 2e-5;  // a slow computer: the Initialize hop's pass ~0.1 s
+  std::vector<HopReport> runs[2];
+  for (std::vector<HopReport>& reports : runs) {
+    Robot robot("hopper_m8.xml", config, false);
+    ASSERT_TRUE(robot.ok());
+    reports = robot.Run(6, Host::kRunsOffline);
+    ASSERT_GE(reports.size(), 6u);
+  }
+  ExpectSameReports(runs[0], runs[1]);
+  int with_pass = 0, without = 0;
+  for (size_t i = 0; i < runs[0].size(); ++i) {
+    const HopReport& r = runs[0][i];
+    SCOPED_TRACE("hop " + std::to_string(i));
+    EXPECT_EQ(r.offline_steps, runs[1][i].offline_steps);
+    EXPECT_EQ(r.latency_ms, runs[1][i].latency_ms);
+    if (std::isnan(r.latency_ms)) continue;  // not handed to the offline part
+    ASSERT_GE(r.offline_steps, 0);
+    EXPECT_DOUBLE_EQ(r.latency_ms, 1e3 * std::max(1e-4, 2e-3 + 2e-5 * r.offline_steps));
+    (r.offline_steps > 0 ? with_pass : without) += 1;
+  }
+  EXPECT_GE(with_pass, 1) << "hop 0 initializes the learner with a pass";
+  EXPECT_GT(runs[0][0].offline_steps, 1000) << "its sweeps over ~1000 samples";
+  EXPECT_GE(without, 1) << "a rejected trial runs no pass";
+  // Off, the latency is the configured one whatever the work.
+  config.modeled_latency = false;
+  Robot fixed("hopper_m8.xml", config, false);
+  ASSERT_TRUE(fixed.ok());
+  for (const HopReport& r : fixed.Run(2, Host::kRunsOffline)) EXPECT_DOUBLE_EQ(r.latency_ms, 0.1);
+}
+
 TEST(OfflinePartTest, AFixedLatencyIsReportedWithTheOfflineTime) {
-  Robot robot("hopper_m8.xml", LearningFromHop0(0.02), false);
+  ControllerConfig config = LearningFromHop0(0.02);
+  config.modeled_latency = false;
+  Robot robot("hopper_m8.xml", config, false);
   ASSERT_TRUE(robot.ok());
   const std::vector<HopReport> reports = robot.Run(2, Host::kRunsOffline);
   ASSERT_EQ(reports.size(), 2u);

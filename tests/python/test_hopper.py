@@ -240,18 +240,24 @@ def test_run_hopper_non_finite_state_raises_run_failed(tmp_path, monkeypatch):
 
 def test_run_hopper_measured_latency():
     # offline_latency="measured": a law never takes effect sooner than its offline part took on
-    # this computer, and never sooner than the 0.02 s floor; the fixed default reports its offline
-    # times too.
+    # this computer, and never sooner than the 0.02 s floor; the modeled default, never sooner
+    # than the model's time for its passes' steps; a fixed one reports its offline times too.
     table = ddoc.run_hopper(SCENARIO, hops=5, offline_latency="measured", log_every=0)
     offline, latency = table["offline_ms"], table["latency_ms"]
     learned = np.isfinite(latency)
     assert learned.any()
     assert np.all(latency[learned] >= offline[learned])
     assert np.all(latency[learned] >= 20.0)
-    fixed = ddoc.run_hopper(SCENARIO, hops=5, log_every=0)
+    modeled = ddoc.run_hopper(SCENARIO, hops=5, log_every=0)
+    learned = np.isfinite(modeled["latency_ms"])
+    model_ms = 1.0 + 3.6e-3 * modeled["offline_steps"][learned]
+    assert np.allclose(modeled["latency_ms"][learned], np.maximum(20.0, model_ms), rtol=1e-12)
+    assert modeled["offline_steps"][0] > 1000  # hop 0 initializes the learner: a pass
+    fixed = ddoc.run_hopper(SCENARIO, hops=5, log_every=0, offline_latency=0.02)
     assert np.all(fixed["latency_ms"][np.isfinite(fixed["latency_ms"])] == 20.0)
     assert np.nanmax(fixed["offline_ms"]) > 0
-    with pytest.raises(ValueError, match=r'offline_latency "soon": expected a number of s or "measured"'):
+    with pytest.raises(ValueError,
+                       match=r'offline_latency "soon": expected a number of s, "modeled" or "measured"'):
         ddoc.run_hopper(SCENARIO, hops=1, offline_latency="soon")
     with pytest.raises(ValueError, match=r"^offline_latency: expected a number of s"):
         ddoc.run_hopper(SCENARIO, hops=1, offline_latency=[1])
