@@ -70,6 +70,9 @@ struct HopReport {
   /// Integration steps of the backward passes in the offline part of this hop (0: none; -1: the
   /// hop was not handed to it).
   long offline_steps = -1;
+  /// CPU time of the thread that ran that offline part, ms (NaN: not handed to it): its own
+  /// time, without the waits of a loaded machine (the latency model's calibration).
+  double offline_cpu_ms = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// One re-solve of u^0 on an identified model (IdentificationSettings).

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <exception>
 #include <limits>
 #include <sstream>
@@ -12,6 +13,13 @@
 
 namespace ddoc::plugin {
 namespace {
+
+// CPU time of the calling thread, s (the offline part's own time, whatever else the machine runs).
+double ThreadCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
 
 // (x, y, xd, yd) of a flight-coordinate state.
 Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
@@ -613,6 +621,7 @@ void HopperController::EndHop(double t, const FlightState14& x) {
 void HopperController::RunOffline() {
   if (job_.load(std::memory_order_acquire) != Job::kPosted) return;
   const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = ThreadCpuSeconds();
   const long steps = driver_->integration_steps();
   try {
     recorders_[1 - recording_].Finish(&trial_);
@@ -633,6 +642,7 @@ void HopperController::RunOffline() {
   offline_seconds_ =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   offline_steps_ = driver_->integration_steps() - steps;
+  offline_cpu_seconds_ = ThreadCpuSeconds() - cpu_start;
   job_.store(Job::kDone, std::memory_order_release);
   if (!worker_.joinable()) TakeOfflineResult();
 }
@@ -663,6 +673,7 @@ void HopperController::TakeOfflineResult() {
     if (!w.needs_outcome) continue;
     w.report.offline_ms = 1e3 * offline_seconds_;
     w.report.offline_steps = offline_steps_;
+    w.report.offline_cpu_ms = 1e3 * offline_cpu_seconds_;
     if (law_pending_) w.report.latency_ms = 1e3 * latency;
     w.report.accepted = outcome_.accepted;
     w.report.learner_cost = outcome_.cost;

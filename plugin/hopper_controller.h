@@ -327,6 +327,7 @@ class HopperController {
   double job_end_ = 0.0;                // simulated time of the handed-over hop's end, s
   double offline_seconds_ = 0.0;        // wall time of the last offline part, s
   long offline_steps_ = 0;              // the backward passes' integration steps in it
+  double offline_cpu_seconds_ = 0.0;    // its thread CPU time, s
   std::thread worker_;
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;

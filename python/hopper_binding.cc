@@ -71,7 +71,9 @@ const HopColumn kHopColumns[] = {
     {"model_mass", false, [](const HopReport& h) { return h.model_mass; }},
     {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
     {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
-    {"offline_steps", true, [](const HopReport& h) { return static_cast<double>(h.offline_steps); }},
+    {"offline_steps", true,
+     [](const HopReport& h) { return static_cast<double>(h.offline_steps); }},
+    {"offline_cpu_ms", false, [](const HopReport& h) { return h.offline_cpu_ms; }},
 };
 constexpr size_t kNumHopColumns = sizeof(kHopColumns) / sizeof(kHopColumns[0]);
 
@@ -261,8 +263,9 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
     try {
       overrides.offline_latency = offline_latency.cast<double>();
     } catch (const py::cast_error&) {
-      throw py::value_error("offline_latency: expected a number of s, \"modeled\" or \"measured\", got " +
-                            py::repr(offline_latency).cast<std::string>());
+      throw py::value_error(
+          "offline_latency: expected a number of s, \"modeled\" or \"measured\", got " +
+          py::repr(offline_latency).cast<std::string>());
     }
   }
   overrides.law_cache = law_cache;
@@ -465,8 +468,9 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
 learner_cost, nominal_cost, predicted, optimality, stance_mass, reverted, identified_mass,
-model_mass) and offline_ms, latency_ms (the
-wall time of the hop's offline part and the simulated latency of its law); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
+model_mass) and offline_ms, latency_ms,
+offline_steps, offline_cpu_ms (the wall time of the hop's offline part, the simulated latency of its
+law, the integration steps of its backward passes and its thread CPU time); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written), initial_law (where u^0 came from, as summary.json's
 initial_law) and resolves (the re-solves of u^0 on an identified mass: hop, mass, took_over_hop,

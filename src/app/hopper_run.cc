@@ -158,7 +158,8 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
            double s = 0;
            if (!ParseFiniteNumber(text, &s)) {
              throw CLI::ValidationError(
-                 "--offline-latency", "\"" + text + "\" is neither a number of s, modeled nor measured");
+                 "--offline-latency",
+                 "\"" + text + "\" is neither a number of s, modeled nor measured");
            }
            offline_latency = s;
          },

@@ -178,7 +178,9 @@ Matrix BackwardPass::cyclic_value() const {
 }
 
 void BackwardPass::SeedCyclicValue(const Matrix& P0) {
-  if (problem_ == nullptr) throw InvalidArgument("BackwardPass::SeedCyclicValue: call Allocate first");
+  if (problem_ == nullptr) {
+    throw InvalidArgument("BackwardPass::SeedCyclicValue: call Allocate first");
+  }
   const int n0 = problem_->system->state_dim(0);
   if (P0.rows() != n0 || P0.cols() != n0) {
     throw InvalidArgument("BackwardPass::SeedCyclicValue: P0 is " + std::to_string(P0.rows()) +
@@ -231,7 +233,8 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   auto lx = c_.lx.head(n);
   auto lxx = c_.lxx.topLeftCorner(n, n);
   auto lux = c_.lux.leftCols(n);
-  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);  // lxx: D is applied in SymmetricStage
+  // lxx: D is applied in SymmetricStage.
+  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);
   lux *= D;
   if (D > 0) {
     c_.H *= D;
@@ -447,8 +450,8 @@ void BackwardPass::Derivative(int k, int n, const ConstMatrixRef& P, const Const
     const int ldt = static_cast<int>(tmp_.outerStride());
     for (int c = 0; c < nz; c += 4) {  // blocks of 4 columns, down to the diagonal
       const int cols = std::min(4, nz - c);
-      internal::SmallProduct(c + cols, cols, m, W_.data(), ldW, mt + c * m, m, tmp_.data() + c * ldt,
-                             ldt);
+      internal::SmallProduct(c + cols, cols, m, W_.data(), ldW, mt + c * m, m,
+                             tmp_.data() + c * ldt, ldt);
     }
     riccati_term_ = true;  // SymmetricStage subtracts tmp_
     for (int j = 0; j < m; ++j) {  // dp += M k
@@ -843,12 +846,10 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
       const double h = tau_(s + 1) - tau_(s);
       // Sub-steps where the Riccati equation is stiff for an explicit step: its linearization
       // dP -> A_cl^T dP + dP A_cl has eigenvalues lambda_i + lambda_j of the closed loop A_cl, so
-      // h |A_cl|_inf <= 1 keeps h |lambda_i + lambda_j| <= 2 (explicit midpoint's real-axis
-      // limit; RK4's is 2.8).
+      // h |S^-1 A_cl S|_inf <= 1 (any diagonal S; RiccatiStiffness) keeps h |lambda_i + lambda_j|
+      // <= 2 (explicit midpoint's real-axis limit; RK4's is 2.8).
       int substeps = 1;
       if (riccati && m_ > 0 && h > 0 && settings_.max_substeps > 1) {
-        // The exact |A_cl|_inf (an n x n x m product) only where the cheap bound allows
-        // stiffness.
         const double stiff = RiccatiStiffness(n, P, 1.0 / h);
         if (h * stiff > 1.0) {
           substeps = static_cast<int>(std::min<double>(settings_.max_substeps, std::ceil(h * stiff)));

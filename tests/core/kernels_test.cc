@@ -49,7 +49,8 @@ TEST(Kernels, TheSparseProductIsTheDenseProductBitForBit) {
         EXPECT_LE((dense - X * A).cwiseAbs().maxCoeff(), 1e-13 * (1.0 + (X * A).norm()));
         Vector x = Sparse(depth, 1, 1.0, &rng), y(cols);
         SparseTransposeTimes(A.data(), depth, pattern, cols, x.data(), y.data());
-        EXPECT_LE((y - A.transpose() * x).cwiseAbs().maxCoeff(), 1e-13 * (1.0 + x.norm() * A.norm()));
+        EXPECT_LE((y - A.transpose() * x).cwiseAbs().maxCoeff(),
+                  1e-13 * (1.0 + x.norm() * A.norm()));
       }
     }
   }
