@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -116,12 +117,51 @@ void RunLog::WriteHop(const plugin::HopReport& h) {
   Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 
+namespace {
+
+// A trajectory.csv row, formatted with std::to_chars: the text of printf's "%.6f" and "%.Pg"
+// (the standard defines to_chars with a precision as printf's conversion), several times faster
+// than fprintf for the ~100,000 rows of a run.
+class Row {
+ public:
+  void Fixed(double v, int precision) { Put(v, std::chars_format::fixed, precision); }
+  void General(double v, int precision) { Put(v, std::chars_format::general, precision); }
+  void Int(int v) { end_ = std::to_chars(end_, buf_ + sizeof(buf_), v).ptr; }
+  void Char(char c) { *end_++ = c; }
+  const char* data() const { return buf_; }
+  std::size_t size() const { return static_cast<std::size_t>(end_ - buf_); }
+
+ private:
+  void Put(double v, std::chars_format f, int precision) {
+    end_ = std::to_chars(end_, buf_ + sizeof(buf_), v, f, precision).ptr;
+  }
+  // 3 + 24 numbers of at most ~330 characters ("%.6f" of 1e308) each.
+  char buf_[27 * 340];
+  char* end_ = buf_;
+};
+
+}  // namespace
+
 void RunLog::WriteSample(const SampleRecord& s) {
   errno = 0;
-  bool ok = std::fprintf(trajectory_, "%.6f,%d,%d", s.t, s.hop, s.phase) >= 0;
-  for (double v : s.q) ok = std::fprintf(trajectory_, ",%.7g", v) >= 0 && ok;
-  for (double v : s.u) ok = std::fprintf(trajectory_, ",%.7g", v) >= 0 && ok;
-  ok = std::fprintf(trajectory_, ",%.4g\n", s.push) >= 0 && ok;
+  Row row;
+  row.Fixed(s.t, 6);
+  row.Char(',');
+  row.Int(s.hop);
+  row.Char(',');
+  row.Int(s.phase);
+  for (double v : s.q) {
+    row.Char(',');
+    row.General(v, 7);
+  }
+  for (double v : s.u) {
+    row.Char(',');
+    row.General(v, 7);
+  }
+  row.Char(',');
+  row.General(s.push, 4);
+  row.Char('\n');
+  const bool ok = std::fwrite(row.data(), 1, row.size(), trajectory_) == row.size();
   Check(trajectory_, "trajectory.csv", ok);
 }
 

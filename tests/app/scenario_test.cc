@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -429,6 +430,48 @@ TEST(RunLogTest, WritesHeadersRowsAndAtomicSummary) {
   }
   fs::remove_all(dir);
   EXPECT_THROW(RunLog("/proc/ddoc_cannot_write_here", "alg1"), std::runtime_error);
+}
+
+// trajectory.csv's rows are printf's "%.6f,%d,%d" and ",%.7g" x 18 and ",%.4g": the same text,
+// byte for byte, for ordinary, huge, tiny, negative-zero and non-finite values.
+TEST(RunLogTest, TrajectoryRowsArePrintfsText) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("ddoc_runlog_rows_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const double values[] = {0.0, -0.0, 1.0 / 3.0, -2.5e-7, 123456789.0, 1e300, -1e-300, 5e-324,
+                           std::nan(""), -std::numeric_limits<double>::infinity(), 0.1, 42.0};
+  std::string expected;
+  {
+    RunLog log(dir.string(), "alg1");
+    for (int r = 0; r < 12; ++r) {
+      SampleRecord s;
+      s.t = values[r] * 7.0;
+      s.hop = r - 3;
+      s.phase = r % 2;
+      for (int i = 0; i < 14; ++i) s.q[i] = values[(r + i) % 12] * (i + 1);
+      for (int i = 0; i < 4; ++i) s.u[i] = values[(r + 2 * i) % 12];
+      s.push = values[(r + 5) % 12];
+      log.WriteSample(s);
+      char buf[400];  // "%.6f" of 7e300 has 308 digits
+      std::snprintf(buf, sizeof(buf), "%.6f,%d,%d", s.t, s.hop, s.phase);
+      expected += buf;
+      for (double v : s.q) {
+        std::snprintf(buf, sizeof(buf), ",%.7g", v);
+        expected += buf;
+      }
+      for (double v : s.u) {
+        std::snprintf(buf, sizeof(buf), ",%.7g", v);
+        expected += buf;
+      }
+      std::snprintf(buf, sizeof(buf), ",%.4g\n", s.push);
+      expected += buf;
+    }
+  }
+  std::ifstream in(dir / "trajectory.csv");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string rows = text.substr(text.find('\n') + 1);  // after the header
+  EXPECT_EQ(rows, expected);
+  fs::remove_all(dir);
 }
 
 // summary.json's accepted counts what the robustness map and results_table count from hops.csv:
