@@ -12,9 +12,13 @@
 
 namespace ddoc {
 
-// The nonzero patterns of the interval's [D f_x, f] (n x (n+1)) and D f_u (n x m).
+// The nonzero patterns of the interval's [D f_x, f] (n x (n+1)) and D f_u (n x m). A mode whose
+// first interval (in a sweep) has dense Jacobians keeps full patterns for the rest of the sweep:
+// finding the zeros of a dense matrix every interval costs more than it saves.
 struct BackwardPass::Sparsity {
   internal::ColumnPattern fx, fu;
+  bool first = true;   // the next Evaluate is the first interval of its mode in this sweep
+  bool full = false;   // this mode's patterns are full for the rest of the sweep
 };
 
 BackwardPass::BackwardPass() : sparsity_(std::make_unique<Sparsity>()) {}
@@ -227,8 +231,17 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   fx *= D;
   fu *= D;
   c_.fx.col(n).head(n) = f;  // [D f_x, f]: one product gives P(:, 0:n) D f_x and P(:, 0:n) f
-  sparsity_->fx.Find(n, n + 1, c_.fx.data(), static_cast<int>(c_.fx.outerStride()));
-  sparsity_->fu.Find(n, m_, c_.fu.data(), static_cast<int>(c_.fu.outerStride()));
+  Sparsity& sp = *sparsity_;
+  if (!sp.full) {
+    sp.fx.Find(n, n + 1, c_.fx.data(), static_cast<int>(c_.fx.outerStride()));
+    sp.fu.Find(n, m_, c_.fu.data(), static_cast<int>(c_.fu.outerStride()));
+    if (sp.first && sp.fx.dense() && (m_ == 0 || sp.fu.dense())) {
+      sp.fx.SetFull(n, n + 1);
+      sp.fu.SetFull(n, m_);
+      sp.full = true;
+    }
+    sp.first = false;
+  }
   c_.l = cost.Running(k, xm, u);
   auto lx = c_.lx.head(n);
   auto lxx = c_.lxx.topLeftCorner(n, n);
@@ -330,7 +343,7 @@ void BackwardPass::Product(int rows, int depth, const double* X, int ldx, bool f
   const internal::ColumnPattern& pattern = fx ? sparsity_->fx : sparsity_->fu;
   const double* A = fx ? c_.fx.data() : c_.fu.data();
   const int lda = static_cast<int>(fx ? c_.fx.outerStride() : c_.fu.outerStride());
-  if (2 * pattern.nonzeros() <= depth * pattern.cols) {
+  if (!pattern.dense()) {
     internal::SparseProduct(rows, X, ldx, A, lda, pattern, Y, ldy);
   } else {
     internal::SmallProduct(rows, pattern.cols, depth, X, ldx, A, lda, Y, ldy);
@@ -699,23 +712,12 @@ double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P, double lim
   // commands: ~20 against ~1000, eigenvalues ~5-8, in tau units). S is this mode's from the
   // last balancing (Osborne's iteration in powers of 2, as LAPACK's dgebal), balanced again
   // only when the bound exceeds `limit`. Cheap first: |S^-1 A_cl S| <= |S^-1 D f_x S| +
-  // |S^-1 F_u| |H_FF^-1| |G S|, with the nonzero patterns of D f_x and F_u.
+  // |S^-1 F_u| |H_FF^-1| |G S|, with the nonzero patterns of D f_x and F_u, and |G S| <=
+  // |F_u^T| |P_xx S| + |L_ux S| before G itself (an n x n x m product for a dense F_u).
   const int m = m_;
   const double* d = stiff_scale_.data();
   const internal::ColumnPattern& fx_nz = sparsity_->fx;
   const internal::ColumnPattern& fu_nz = sparsity_->fu;
-  auto gain = stiff_gain_.leftCols(n);  // m x n: G
-  for (int c = 0; c < n; ++c) {
-    const double* pc = P.data() + static_cast<Eigen::Index>(c) * P.outerStride();
-    for (int i = 0; i < m; ++i) {
-      double t = c_.lux(i, c);
-      for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
-        const int l = fu_nz.rows[q];
-        t += c_.fu(l, i) * pc[l];  // P_xx(l, c) = P_xx(c, l) up to rounding
-      }
-      gain(i, c) = t;
-    }
-  }
   auto row = stiff_rows_.col(0).head(n);  // row sums of |D f_x S|
   row.setZero();
   for (int c = 0; c < n; ++c) {
@@ -736,12 +738,42 @@ double BackwardPass::RiccatiStiffness(int n, const ConstMatrixRef& P, double lim
     fx_norm = std::max(fx_norm, row(l) / d[l]);
     fu_norm = std::max(fu_norm, fu_row(l) / d[l]);
   }
-  double h_norm = 0.0, g_norm = 0.0;
+  double h_norm = 0.0, fut_norm = 0.0, lux_norm = 0.0;
   for (int i = 0; i < m; ++i) {
-    double hr = 0.0, gr = 0.0;
+    double hr = 0.0, fr = 0.0, lr = 0.0;
     for (int j = 0; j < m; ++j) hr += std::abs(c_.Hinv(i, j));
-    for (int c = 0; c < n; ++c) gr += std::abs(gain(i, c)) * d[c];
+    for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
+      fr += std::abs(c_.fu(fu_nz.rows[q], i));
+    }
+    for (int c = 0; c < n; ++c) lr += std::abs(c_.lux(i, c)) * d[c];
     h_norm = std::max(h_norm, hr);
+    fut_norm = std::max(fut_norm, fr);
+    lux_norm = std::max(lux_norm, lr);
+  }
+  double ps_norm = 0.0;  // |P_xx S|_inf
+  for (int r = 0; r < n; ++r) {
+    double sum = 0.0;
+    for (int c = 0; c < n; ++c) sum += std::abs(P(r, c)) * d[c];
+    ps_norm = std::max(ps_norm, sum);
+  }
+  const double coarse = fx_norm + fu_norm * h_norm * (fut_norm * ps_norm + lux_norm);
+  if (coarse <= limit || !std::isfinite(coarse)) return coarse;
+  auto gain = stiff_gain_.leftCols(n);  // m x n: G
+  for (int c = 0; c < n; ++c) {
+    const double* pc = P.data() + static_cast<Eigen::Index>(c) * P.outerStride();
+    for (int i = 0; i < m; ++i) {
+      double t = c_.lux(i, c);
+      for (int q = fu_nz.start[i]; q < fu_nz.start[i + 1]; ++q) {
+        const int l = fu_nz.rows[q];
+        t += c_.fu(l, i) * pc[l];  // P_xx(l, c) = P_xx(c, l) up to rounding
+      }
+      gain(i, c) = t;
+    }
+  }
+  double g_norm = 0.0;
+  for (int i = 0; i < m; ++i) {
+    double gr = 0.0;
+    for (int c = 0; c < n; ++c) gr += std::abs(gain(i, c)) * d[c];
     g_norm = std::max(g_norm, gr);
   }
   const double bound = fx_norm + fu_norm * h_norm * g_norm;
@@ -836,6 +868,8 @@ bool BackwardPass::Sweep(const Trajectory& nominal, const Matrix* du_prev, bool 
     auto P = P_.topLeftCorner(nz, nz);
     auto p = p_.head(nz);
     stiff_scale_.setOnes();  // each mode balances from S = I (RiccatiStiffness)
+    sparsity_->first = true;
+    sparsity_->full = false;
     for (int j = N - 2; j >= 0; --j) {
       const int s = index(k, j);
       Evaluate(k, nominal, j, du_prev);

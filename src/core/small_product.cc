@@ -207,15 +207,27 @@ void ColumnPattern::Allocate(int max_depth, int max_cols) {
   cols = 0;
 }
 
-void ColumnPattern::Find(int depth, int num_cols, const double* A, int lda) {
+void ColumnPattern::Find(int num_depth, int num_cols, const double* A, int lda) {
+  depth = num_depth;
   cols = num_cols;
   int k = 0;
   for (int c = 0; c < num_cols; ++c) {
     start[c] = k;
     const double* a = A + static_cast<ptrdiff_t>(c) * lda;
-    for (int l = 0; l < depth; ++l) {
+    for (int l = 0; l < num_depth; ++l) {
       if (a[l] != 0.0) rows[k++] = l;
     }
+  }
+  start[num_cols] = k;
+}
+
+void ColumnPattern::SetFull(int num_depth, int num_cols) {
+  depth = num_depth;
+  cols = num_cols;
+  int k = 0;
+  for (int c = 0; c < num_cols; ++c) {
+    start[c] = k;
+    for (int l = 0; l < num_depth; ++l) rows[k++] = l;
   }
   start[num_cols] = k;
 }
@@ -257,6 +269,14 @@ void SparseProduct(int rows, const double* X, int ldx, const double* A, int lda,
 
 void SparseTransposeTimes(const double* A, int lda, const ColumnPattern& pattern, int cols,
                           const double* x, double* y) {
+  const int depth = pattern.depth;
+  if (pattern.dense()) {  // Eigen's packet dot products
+    for (int c = 0; c < cols; ++c) {
+      y[c] = Eigen::Map<const Eigen::VectorXd>(A + static_cast<ptrdiff_t>(c) * lda, depth)
+                 .dot(Eigen::Map<const Eigen::VectorXd>(x, depth));
+    }
+    return;
+  }
   for (int c = 0; c < cols; ++c) {
     const double* a = A + static_cast<ptrdiff_t>(c) * lda;
     double acc = 0.0;

@@ -29,10 +29,13 @@ bool UseAvx2Kernels();
 struct ColumnPattern {
   std::vector<int> start;  // cols + 1: column c's rows are rows[start[c] .. start[c + 1])
   std::vector<int> rows;   // depth x cols at most
-  int cols = 0;
+  int depth = 0, cols = 0;
   void Allocate(int max_depth, int max_cols);
   void Find(int depth, int cols, const double* A, int lda);
+  /// Every entry of a depth x cols matrix, zero or not (a pattern that fits any such matrix).
+  void SetFull(int depth, int cols);
   int nonzeros() const { return start[cols]; }
+  bool dense() const { return 2 * nonzeros() > depth * cols; }
 };
 
 /// Y (rows x cols) = X (rows x depth) * A for A with the nonzero pattern `pattern` (Find() of
@@ -44,7 +47,8 @@ void SparseProduct(int rows, const double* X, int ldx, const double* A, int lda,
                    const ColumnPattern& pattern, double* Y, int ldy);
 
 /// y (cols) = A(:, 0:cols)^T x for A with the nonzero pattern `pattern` (cols <= its columns):
-/// y(c) is the sum over the nonzero A(l, c) x(l) in increasing l.
+/// y(c) is the sum over the nonzero A(l, c) x(l) in increasing l, or Eigen's dot product of the
+/// whole column where more than half of A is nonzero.
 void SparseTransposeTimes(const double* A, int lda, const ColumnPattern& pattern, int cols,
                           const double* x, double* y);
 
