@@ -4,6 +4,7 @@
 #ifndef DDOC_ONLINE_CONTROLLER_H_
 #define DDOC_ONLINE_CONTROLLER_H_
 
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -170,6 +171,18 @@ class OnlineController : public Policy {
   Vector lo_, hi_; // m
   Vector du_;      // m
   Matrix gain_;    // m x n_max: BlendStateFeedback's H_law^{-1} G_law
+  // Content revision: a number no other state of any controller had, new at every change of the
+  // law (Allocate, Load, ImportLaw, BlendStateFeedback); copies share it with their content.
+  std::uint64_t revision_ = 0;
+  static std::uint64_t NextRevision();
+  // BlendStateFeedback's H_law^{-1} G_law of every sample (m * n_max x S, 0: no feedback to take),
+  // valid for the law of blend_law_revision_ at this controller's tau_, nominal_T_ and counts as
+  // they were (the learner blends every trial of a nominal with the same law).
+  Matrix blend_g_;
+  std::vector<char> blend_ok_;
+  std::uint64_t blend_law_revision_ = 0;
+  Vector blend_tau_, blend_T_;
+  std::vector<int> blend_counts_;
   Eigen::LLT<Matrix> llt_;  // m x m: BlendStateFeedback's factor of H_law
   // Per-trial bookkeeping.
   double du_integral_ = 0;

@@ -2,6 +2,7 @@
 #include "ddoc/online_controller.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -33,6 +34,11 @@ void CheckStateFeedbackScale(const std::vector<Vector>& scale, const SwitchedSys
 }
 
 }  // namespace
+
+std::uint64_t OnlineController::NextRevision() {
+  static std::atomic<std::uint64_t> next{0};
+  return ++next;
+}
 
 void OnlineController::Allocate(const Problem& problem, int max_samples,
                                 const OnlineControllerSettings& settings) {
@@ -71,7 +77,14 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   du_.setZero(m_);
   gain_.setZero(m_, n_max_);
   llt_ = Eigen::LLT<Matrix>(m_);
+  blend_g_.setZero(static_cast<Eigen::Index>(m_) * n_max_, max_samples);
+  blend_ok_.assign(static_cast<size_t>(max_samples), 0);
+  blend_tau_.setZero(max_samples);
+  blend_T_.setZero(K_);
+  blend_counts_.assign(K_, -1);
+  blend_law_revision_ = 0;
   loaded_ = false;
+  revision_ = NextRevision();
 }
 
 void OnlineController::SetStateFeedbackScale(const std::vector<Vector>& scale) {
@@ -136,6 +149,7 @@ void OnlineController::Load(const Trajectory& nominal, const BackwardPass& pass,
     }
   }
   loaded_ = true;
+  revision_ = NextRevision();
   BeginTrial();
 }
 
@@ -237,6 +251,7 @@ void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
   c_.leftCols(S) = law.c;
   huu_.leftCols(S) = law.huu;
   loaded_ = true;
+  revision_ = NextRevision();
   BeginTrial();
 }
 
@@ -264,7 +279,13 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
   if (w == 1.0) return;
   // A law whose state feedback is scaled by alpha = 0 (kLyapunov) has none to replace.
   if (!(feedback_factor_ > 0.0)) return;
-  for (int k = 0; k < K_; ++k) {
+  // H_law^{-1} G_law at this controller's samples depends on `law` and on this controller's
+  // grid, not on w or this law's gains: computed once for the trials of a nominal.
+  const int S = layout_.total();
+  bool reuse = blend_law_revision_ == law.revision_ && law.revision_ != 0 &&
+               blend_T_ == nominal_T_ && blend_tau_.head(S) == tau_.head(S);
+  for (int k = 0; k < K_ && reuse; ++k) reuse = blend_counts_[k] == layout_.count(k);
+  for (int k = 0; k < K_ && !reuse; ++k) {
     const int n = layout_.dim(k);
     const double nominal_duration = nominal_T_(k) - (k == 0 ? 0.0 : nominal_T_(k - 1));
     int j = 0;
@@ -282,14 +303,32 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
               Eigen::Map<const Matrix>(law.Kx_.col(s0).data(), m_, n) +
           (a * law.feedback_factor_) * Eigen::Map<const Matrix>(law.Kx_.col(s1).data(), m_, n);
       llt_.compute(H_);
-      if (llt_.info() != Eigen::Success) continue;  // no feedback to take: keep this law's
+      blend_ok_[s] = llt_.info() == Eigen::Success;  // else no feedback to take: keep this law's
+      if (!blend_ok_[s]) continue;
       llt_.solveInPlace(g);  // H_law^{-1} G_law
+      Eigen::Map<Matrix>(blend_g_.col(s).data(), m_, n) = g;
+    }
+  }
+  if (!reuse) {
+    blend_law_revision_ = law.revision_;
+    blend_T_ = nominal_T_;
+    blend_tau_.head(S) = tau_.head(S);
+    for (int k = 0; k < K_; ++k) blend_counts_[k] = layout_.count(k);
+  }
+  for (int k = 0; k < K_; ++k) {
+    const int n = layout_.dim(k);
+    for (int i = 0; i < layout_.count(k); ++i) {
+      const int s = layout_.index(k, i);
+      if (!blend_ok_[s]) continue;
+      auto g = gain_.leftCols(n);
+      g = Eigen::Map<const Matrix>(blend_g_.col(s).data(), m_, n);
       Eigen::Map<Matrix> K(Kx_.col(s).data(), m_, n);
       K *= w;
       K.noalias() += ((1.0 - w) / feedback_factor_) *
                      (Eigen::Map<const Matrix>(huu_.col(s).data(), m_, m_) * g);
     }
   }
+  revision_ = NextRevision();
 }
 
 void OnlineController::BeginTrial() {

@@ -3,6 +3,7 @@
 // OnlineController (33)-(34): against an independent evaluation of (33)-(34), the time
 // mapping and its clamping, robustness to non-finite input, int |du|^2, no allocation.
 #include <cmath>
+#include <utility>
 #include <functional>
 #include <limits>
 #include <random>
@@ -350,6 +351,53 @@ TEST(OnlineController, BlendStateFeedbackMixesInTheOtherLawsFeedback) {
   ExpectThrowsWith([&] { ctrl.BlendStateFeedback(other_states, 0.5); },
                    "mode 0 has state size 5 in the other law, 4 in this one");
   ExpectStepsMatchQp(s, ctrl, 9, expected_b(0.0));
+}
+
+// BlendStateFeedback keeps H_o^{-1} G_o of the other law for the trials of a nominal: a blend
+// that reuses it equals, bit for bit, the blend of a controller that never blended before, and
+// a change of the other law (a new Load) or of this controller's nominal is seen.
+TEST(OnlineController, ABlendFollowsTheOtherLawsChanges) {
+  ControlSetup s(3, 4, 3, 1.0, BackwardEquation::kRiccati, 0.3);
+  BackwardPass pass2, pass5;
+  for (auto [p, mu] : {std::pair{&pass2, 2.0}, {&pass5, 5.0}}) {
+    p->Allocate(s.problem, s.nominal.total_samples(), s.pass.settings());
+    p->Run(s.nominal, mu);
+  }
+  const Vector dT = Vector::Constant(2, 0.01), dT_other = Vector::Constant(2, 0.03);
+  auto blended = [&](OnlineController& ctrl, const OnlineController& law, double w) {
+    ctrl.Load(s.nominal, s.pass, 0.7, dT);
+    ctrl.BlendStateFeedback(law, w);
+    return ctrl.ExportLaw().Kx;
+  };
+  auto fresh = [&](const OnlineController& law, double w) {
+    OnlineController ctrl;
+    ctrl.Allocate(s.problem, s.nominal.total_samples());
+    return blended(ctrl, law, w);
+  };
+  OnlineController law, ctrl;
+  law.Allocate(s.problem, s.nominal.total_samples());
+  ctrl.Allocate(s.problem, s.nominal.total_samples());
+  law.Load(s.nominal, pass2, 0.4, dT_other);
+  const Matrix first = blended(ctrl, law, 0.3);
+  EXPECT_TRUE(first == fresh(law, 0.3));
+  EXPECT_TRUE(blended(ctrl, law, 0.6) == fresh(law, 0.6)) << "the kept H_o^-1 G_o, another w";
+  law.Load(s.nominal, pass5, 0.4, dT_other);  // the other law changes
+  const Matrix second = blended(ctrl, law, 0.3);
+  EXPECT_TRUE(second == fresh(law, 0.3));
+  EXPECT_FALSE(second == first);
+  OnlineController copy = law;  // the same content: the kept values still fit
+  EXPECT_TRUE(blended(ctrl, copy, 0.3) == second);
+  // This controller's nominal changes (other durations): the mapping changes with it.
+  Trajectory shifted = s.nominal;
+  for (ModeTrajectory& mode : shifted.modes) mode.t *= 1.1;
+  shifted.T *= 1.1;
+  ctrl.Load(shifted, s.pass, 0.7, dT);
+  ctrl.BlendStateFeedback(law, 0.3);
+  OnlineController other_ctrl;
+  other_ctrl.Allocate(s.problem, s.nominal.total_samples());
+  other_ctrl.Load(shifted, s.pass, 0.7, dT);
+  other_ctrl.BlendStateFeedback(law, 0.3);
+  EXPECT_TRUE(ctrl.ExportLaw().Kx == other_ctrl.ExportLaw().Kx);
 }
 
 TEST(OnlineController, StepDoesNotAllocate) {
