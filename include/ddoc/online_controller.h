@@ -175,9 +175,10 @@ class OnlineController : public Policy {
   // law (Allocate, Load, ImportLaw, BlendStateFeedback); copies share it with their content.
   std::uint64_t revision_ = 0;
   static std::uint64_t NextRevision();
-  // BlendStateFeedback's H_law^{-1} G_law of every sample (m * n_max x S, 0: no feedback to take),
-  // valid for the law of blend_law_revision_ at this controller's tau_, nominal_T_ and counts as
-  // they were (the learner blends every trial of a nominal with the same law).
+  // BlendStateFeedback's H_law^{-1} G_law of every sample (m * n_max x S, sized by the first
+  // blend; blend_ok_ 0: no feedback to take), valid for the law of blend_law_revision_ at this
+  // controller's tau_, nominal_T_ and counts as they were (the learner blends every trial of a
+  // nominal with the same law).
   Matrix blend_g_;
   std::vector<char> blend_ok_;
   std::uint64_t blend_law_revision_ = 0;

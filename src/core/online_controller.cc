@@ -77,9 +77,9 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   du_.setZero(m_);
   gain_.setZero(m_, n_max_);
   llt_ = Eigen::LLT<Matrix>(m_);
-  blend_g_.setZero(static_cast<Eigen::Index>(m_) * n_max_, max_samples);
-  blend_ok_.assign(static_cast<size_t>(max_samples), 0);
-  blend_tau_.setZero(max_samples);
+  blend_g_.resize(static_cast<Eigen::Index>(m_) * n_max_, 0);  // sized by the first blend
+  blend_ok_.clear();
+  blend_tau_.resize(0);
   blend_T_.setZero(K_);
   blend_counts_.assign(K_, -1);
   blend_law_revision_ = 0;
@@ -282,6 +282,13 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
   // H_law^{-1} G_law at this controller's samples depends on `law` and on this controller's
   // grid, not on w or this law's gains: computed once for the trials of a nominal.
   const int S = layout_.total();
+  if (blend_g_.cols() < S) {  // the first blend, or a nominal with more samples: allocates
+    const Eigen::Index cols = S + S / 4;
+    blend_g_.resize(blend_g_.rows(), cols);
+    blend_ok_.assign(static_cast<size_t>(cols), 0);
+    blend_tau_.resize(cols);
+    blend_law_revision_ = 0;
+  }
   bool reuse = blend_law_revision_ == law.revision_ && law.revision_ != 0 &&
                blend_T_ == nominal_T_ && blend_tau_.head(S) == tau_.head(S);
   for (int k = 0; k < K_ && reuse; ++k) reuse = blend_counts_[k] == layout_.count(k);

@@ -188,13 +188,22 @@ DDOC_AVX2 inline void Store(double* base, Index ld, int r, int c, __m256d v) {
   _mm256_storeu_pd(base + c * ld + r, v);
 }
 
+// L's rows r..r+3 of column c < n; L has n rows, so in a diagonal block that crosses row n the
+// rows from n on are not read (they are zero here, and MirrorUpper replaces them anyway).
+DDOC_AVX2 inline __m256d LoadL(const Args& s, int r, int c) {
+  if (r + 3 < s.n) return Load(s.L, s.ldl, r, c);
+  const __m256i lanes = _mm256_set_epi64x(r + 3, r + 2, r + 1, r);
+  const __m256i mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(s.n), lanes);
+  return _mm256_maskload_pd(s.L + c * s.ldl + r, mask);
+}
+
 // dP's columns c..c+3 on rows r..r+3 (upper formula: Y(r, c) + Y(c, r) + q L(r, c) - R(r, c)),
 // with yt the columns of the mirror block's transpose (Y(c + j, r..r+3)).
 DDOC_AVX2 inline void BlockValue(const Args& s, int r, int c, const __m256d* yt, __m256d* d) {
   const __m256d q = _mm256_set1_pd(s.q);
   for (int j = 0; j < 4; ++j) {
     d[j] = _mm256_add_pd(Load(s.Y, s.ldy, r, c + j), yt[j]);
-    if (c + j < s.n) d[j] = _mm256_fmadd_pd(q, Load(s.L, s.ldl, r, c + j), d[j]);
+    if (c + j < s.n) d[j] = _mm256_fmadd_pd(q, LoadL(s, r, c + j), d[j]);
     if (s.R != nullptr) d[j] = _mm256_sub_pd(d[j], Load(s.R, s.ldr, r, c + j));
   }
 }
