@@ -473,10 +473,13 @@ Eigen::Map<const Matrix> OnePoint(const ConstVectorRef& x) {
   return Eigen::Map<const Matrix>(x.data(), x.size(), 1);
 }
 
-/// X (N, n) given to a batch method as the engine's n x N points (n, N: -1 = any).
-Matrix PointsFromArray(const py::object& X, const std::string& name, Eigen::Index n,
-                       Eigen::Index N = -1) {
-  return AsMatrix(X, name, N, n).transpose();
+/// X (N, n) and U (N, m) given to a batch method as the engine's n x N and m x N points
+/// (n, m: -1 = any).
+std::pair<Matrix, Matrix> PointsFromArrays(const py::object& X, const py::object& U,
+                                           Eigen::Index n, Eigen::Index m) {
+  Matrix x = AsMatrix(X, "X", -1, n).transpose();
+  Matrix u = AsMatrix(U, "U", x.cols(), m).transpose();
+  return {std::move(x), std::move(u)};
 }
 
 /// The N blocks rows x cols of M (rows x cols N) as an (N, rows, cols) array.
@@ -1205,8 +1208,7 @@ class SolveInterrupted(KeyboardInterrupt):
           "flow_batch",
           [](const SwitchedSystem& s, int k, const py::object& X, const py::object& U) {
             if (k < 0 || k >= s.num_modes()) throw InvalidArgument("k: out of range");
-            const Matrix x = PointsFromArray(X, "X", s.state_dim(k));
-            const Matrix u = PointsFromArray(U, "U", s.input_dim(), x.cols());
+            const auto [x, u] = PointsFromArrays(X, U, s.state_dim(k), s.input_dim());
             Matrix F(x.rows(), x.cols());
             s.FlowBatch(k, x, u, F);
             return Matrix(F.transpose());
@@ -1218,8 +1220,7 @@ class SolveInterrupted(KeyboardInterrupt):
           [](const SwitchedSystem& s, int k, const py::object& X, const py::object& U) {
             if (k < 0 || k >= s.num_modes()) throw InvalidArgument("k: out of range");
             const int n = s.state_dim(k), m = s.input_dim();
-            const Matrix x = PointsFromArray(X, "X", n);
-            const Matrix u = PointsFromArray(U, "U", m, x.cols());
+            const auto [x, u] = PointsFromArrays(X, U, n, m);
             const Eigen::Index N = x.cols();
             Matrix FX(n, n * N), FU(n, m * N);
             s.FlowDerivativesBatch(k, x, u, FX, FU);
@@ -1255,8 +1256,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def(
           "running_batch",
           [](const SwitchedCost& c, int k, const py::object& X, const py::object& U) {
-            const Matrix x = PointsFromArray(X, "X", -1);
-            const Matrix u = PointsFromArray(U, "U", -1, x.cols());
+            const auto [x, u] = PointsFromArrays(X, U, -1, -1);
             Vector l(x.cols());
             c.RunningBatch(k, x, u, l);
             return l;
@@ -1266,8 +1266,7 @@ class SolveInterrupted(KeyboardInterrupt):
       .def(
           "running_derivatives_batch",
           [](const SwitchedCost& c, int k, const py::object& X, const py::object& U) {
-            const Matrix x = PointsFromArray(X, "X", -1);
-            const Matrix u = PointsFromArray(U, "U", -1, x.cols());
+            const auto [x, u] = PointsFromArrays(X, U, -1, -1);
             const Eigen::Index n = x.rows(), m = u.rows(), N = x.cols();
             Matrix LX(n, N), LU(m, N), LXX(n, n * N), LUU(m, m * N), LUX(m, n * N);
             c.RunningDerivativesBatch(k, x, u, LX, LU, LXX, LUU, LUX);

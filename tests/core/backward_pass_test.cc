@@ -299,6 +299,22 @@ void ExpectSamePass(const BackwardPass& a, const BackwardPass& b, int K) {
   EXPECT_EQ(a.sweeps(), b.sweeps());
 }
 
+// A pass (regularization 1e-3) on `nominal` of setup's problem seen through BatchingSystem and
+// BatchingCost.
+struct BatchedPass {
+  BatchingSystem sys;
+  BatchingCost cost;
+  Problem problem;
+  BackwardPass pass;
+  BatchedPass(const NonlinearSetup& setup, bool batch_system, bool batch_cost,
+              const Trajectory& nominal, const BackwardPassSettings& settings)
+      : sys(setup.sys, batch_system), cost(setup.cost, batch_cost),
+        problem(MakeNonlinearProblem(sys, cost)) {
+    pass.Allocate(problem, nominal.total_samples(), settings);
+    EXPECT_TRUE(pass.Run(nominal, 1e-3));
+  }
+};
+
 // A system and a cost that prefer_batch() (their batch calls the C++ default, the per-point
 // loop) give the per-point pass bit for bit, with two batch calls per mode and Run (the flow
 // and its derivatives; the running cost and its derivatives) and no per-point call; either
@@ -312,26 +328,18 @@ TEST(BackwardPass, BatchEvaluationGivesThePerPointPass) {
     BackwardPassSettings settings;
     settings.equation = equation;
     settings.keep_P_trajectory = true;
-    BatchingSystem sys_point(setup.sys, false);
-    BatchingCost cost_point(setup.cost, false);
-    const Problem point = MakeNonlinearProblem(sys_point, cost_point);
-    BackwardPass reference;
-    reference.Allocate(point, nominal.total_samples(), settings);
-    ASSERT_TRUE(reference.Run(nominal, 1e-3));
-    EXPECT_EQ(sys_point.batch_calls + cost_point.batch_calls, 0);
-    EXPECT_GT(sys_point.point_calls, 0);
+    const BatchedPass reference(setup, false, false, nominal, settings);
+    EXPECT_EQ(reference.sys.batch_calls + reference.cost.batch_calls, 0);
+    EXPECT_GT(reference.sys.point_calls, 0);
     for (const bool batch_system : {true, false}) {
       for (const bool batch_cost : {true, false}) {
         if (!batch_system && !batch_cost) continue;
-        BatchingSystem sys(setup.sys, batch_system);
-        BatchingCost cost(setup.cost, batch_cost);
-        const Problem problem = MakeNonlinearProblem(sys, cost);
-        BackwardPass pass;
-        pass.Allocate(problem, nominal.total_samples(), settings);
-        ASSERT_TRUE(pass.Run(nominal, 1e-3));
+        const BatchedPass batched(setup, batch_system, batch_cost, nominal, settings);
+        const BatchingSystem& sys = batched.sys;
+        const BatchingCost& cost = batched.cost;
         SCOPED_TRACE(::testing::Message() << "equation " << static_cast<int>(equation)
                                         << " system " << batch_system << " cost " << batch_cost);
-        ExpectSamePass(reference, pass, 3);
+        ExpectSamePass(reference.pass, batched.pass, 3);
         EXPECT_EQ(sys.batch_calls, batch_system ? 6 : 0);
         EXPECT_EQ(sys.batch_points, batch_system ? 2 * intervals : 0);
         EXPECT_EQ(cost.batch_calls, batch_cost ? 6 : 0);
