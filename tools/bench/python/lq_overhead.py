@@ -32,9 +32,9 @@ try:
     import ddoc  # noqa: E402
     import ddoc_testing  # noqa: E402
 except ImportError as e:
-    sys.exit(f"lq_overhead.py: {sys.executable} cannot import {e.name} ({e}); run it with "
-             f"/usr/bin/python3 and PYTHONPATH=build/python (ddoc and ddoc_testing are built "
-             f"there)")
+    sys.exit(f"lq_overhead.py: {sys.executable} cannot import {e.name or 'ddoc'} ({e}); run it "
+             f"with /usr/bin/python3 and PYTHONPATH=build/python (ddoc and ddoc_testing are "
+             f"built there)")
 import standard_pose  # noqa: E402
 from standard_pose import exp1_python_cost, exp1_system, pose, suite_bounds  # noqa: E402
 
