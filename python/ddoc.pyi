@@ -39,16 +39,31 @@ class System:
     def flow(self, k: int, x: ArrayLike, u: ArrayLike) -> Array: ...
     def flow_derivatives(self, k: int, x: ArrayLike, u: ArrayLike) -> Tuple[Array, Array]: ...
     def reset(self, k: int, x: ArrayLike) -> Array: ...
+    @property
+    def prefers_batch(self) -> bool:
+        """True when the backward pass evaluates the flow once per mode (a batch callable)."""
+    def flow_batch(self, k: int, X: ArrayLike, U: ArrayLike) -> Array:
+        """Xdot (N, n_k) at the N points, rows of X (N, n_k) and U (N, m)."""
+    def flow_derivatives_batch(self, k: int, X: ArrayLike, U: ArrayLike) -> Tuple[Array, Array]:
+        """(FX (N, n_k, n_k), FU (N, n_k, m)) at the N points."""
 
 class LinearSystem(System):
     """xdot = A_k x + B_k u, x+ = E_k x; entirely in C++. B None: m = 0; E None: identity."""
     def __init__(self, A: Sequence[ArrayLike], B: Optional[Sequence[ArrayLike]] = None,
                  E: Optional[Sequence[ArrayLike]] = None) -> None: ...
 
+BatchFlow = Callable[[int, Array, Array], ArrayLike]  # (k, X (N, n_k), U (N, m)) -> (N, n_k)
+BatchFlowDerivatives = Callable[[int, Array, Array], Tuple[ArrayLike, ArrayLike]]
+BatchRunning = Callable[[int, Array, Array], ArrayLike]  # (k, X, U) -> l (N,)
+BatchRunningDerivatives = Callable[[int, Array, Array], Tuple[ArrayLike, ArrayLike, ArrayLike,
+                                                              ArrayLike, ArrayLike]]
+
 class CallbackSystem(System):
-    """A switched system of Python callables; missing derivatives by central differences."""
+    """A switched system of Python callables; missing derivatives by central differences.
+    flow_batch / flow_derivatives_batch (instead of or beside flow): all the points of a mode
+    in one call, (N, n_k) / (N, n_k, n_k) and (N, n_k, m) arrays."""
     def __init__(self, state_dims: Sequence[int], input_dim: int,
-                 flow: Callable[[int, Array, Array], ArrayLike],
+                 flow: Optional[Callable[[int, Array, Array], ArrayLike]] = None,
                  reset: Optional[Callable[[int, Array], ArrayLike]] = None,
                  flow_derivatives: Optional[Callable[[int, Array, Array],
                                                      Tuple[ArrayLike, ArrayLike]]] = None,
@@ -56,12 +71,23 @@ class CallbackSystem(System):
                  surface_dims: Sequence[int] = ...,
                  surface: Optional[Callable[[int, Array], ArrayLike]] = None,
                  surface_derivative: Optional[Callable[[int, Array], ArrayLike]] = None,
-                 cycle_reset: bool = False, fd_step: float = 1e-6) -> None: ...
+                 cycle_reset: bool = False, fd_step: float = 1e-6,
+                 flow_batch: Optional[BatchFlow] = None,
+                 flow_derivatives_batch: Optional[BatchFlowDerivatives] = None) -> None: ...
 
 class Cost:
     """Running costs l_k(x, u) and switching costs phi_k(x)."""
     def running(self, k: int, x: ArrayLike, u: ArrayLike) -> float: ...
     def switching(self, k: int, x: ArrayLike) -> float: ...
+    @property
+    def prefers_batch(self) -> bool:
+        """True when the backward pass and the cost evaluation call the running cost once per
+        mode (a batch callable)."""
+    def running_batch(self, k: int, X: ArrayLike, U: ArrayLike) -> Array:
+        """l (N,) at the N points, rows of X (N, n_k) and U (N, m)."""
+    def running_derivatives_batch(self, k: int, X: ArrayLike, U: ArrayLike) -> Tuple[
+            Array, Array, Array, Array, Array]:
+        """(LX (N, n_k), LU (N, m), LXX (N, n_k, n_k), LUU (N, m, m), LUX (N, m, n_k))."""
 
 class QuadraticCost(Cost):
     """l_k = 1/2 (x-r_k)'Q_k(x-r_k) + 1/2 u'R_k u + u'N_k(x-r_k) + rho_k,
@@ -73,14 +99,18 @@ class QuadraticCost(Cost):
                  N: Optional[Sequence[ArrayLike]] = None) -> None: ...
 
 class CallbackCost(Cost):
-    """A cost of Python callables; missing derivatives by central differences."""
-    def __init__(self, running: Callable[[int, Array, Array], float],
+    """A cost of Python callables; missing derivatives by central differences.
+    running_batch / running_derivatives_batch (instead of or beside running): all the points of
+    a mode in one call."""
+    def __init__(self, running: Optional[Callable[[int, Array, Array], float]] = None,
                  switching: Optional[Callable[[int, Array], float]] = None,
                  running_derivatives: Optional[Callable[[int, Array, Array], Tuple[
                      ArrayLike, ArrayLike, ArrayLike, ArrayLike, ArrayLike]]] = None,
                  switching_derivatives: Optional[Callable[[int, Array],
                                                           Tuple[ArrayLike, ArrayLike]]] = None,
-                 fd_step: float = 1e-6, fd_hessian_step: float = 1e-4) -> None: ...
+                 fd_step: float = 1e-6, fd_hessian_step: float = 1e-4,
+                 running_batch: Optional[BatchRunning] = None,
+                 running_derivatives_batch: Optional[BatchRunningDerivatives] = None) -> None: ...
 
 class Problem:
     """The problem (9)-(10); validates on construction (ValueError)."""

@@ -267,20 +267,262 @@ py::array_t<double> ToArray(const ConstVectorRef& v) {
   return a;
 }
 
-/// A SwitchedSystem whose parts are Python callables (called with the GIL held).
+/// A callable of mode k as messages name it, "flow_batch(k=0)"; the string is built only for a
+/// message (the per-point callables run ~10^5 times a solve).
+struct Callee {
+  const char* what;
+  int k;
+  Eigen::Index points = -1;  ///< a batch call's N (-1: a per-point callable)
+  std::string str() const { return Indexed(what, k); }
+};
+
+/// fn(k, a[, b]), the GIL held (a vectorcall: no argument tuple). An exception raised in it
+/// propagates unchanged, with the note "raised in ddoc's call of flow_batch(k=0) with N points"
+/// (PEP 678, shown under the traceback) naming the callable.
+py::object Call(const py::object& fn, const Callee& callee, py::handle a,
+                py::handle b = py::handle()) {
+  const py::int_ k(callee.k);
+  // Own references for the call: a nested call of the same callable (from a C function that
+  // borrows its arguments) then sees a reused ArgumentArray as taken.
+  const py::object hold_a = py::reinterpret_borrow<py::object>(a);
+  const py::object hold_b = py::reinterpret_borrow<py::object>(b);
+  PyObject* argv[3] = {k.ptr(), a.ptr(), b.ptr()};
+  PyObject* r = PyObject_Vectorcall(fn.ptr(), argv, b ? 3 : 2, nullptr);
+  if (r == nullptr) {
+    py::error_already_set e;
+    const py::object value = e.value();
+    if (value && py::hasattr(value, "add_note")) {
+      std::string note = "raised in ddoc's call of " + callee.str();
+      if (callee.points >= 0) note += " with " + std::to_string(callee.points) + " points";
+      value.attr("add_note")(note);
+    }
+    throw e;
+  }
+  return py::reinterpret_steal<py::object>(r);
+}
+
+/// The (n,) float64 array that passes x to a per-point callable, reused from call to call only
+/// while Python keeps no reference to it: after a call that stored x (or a view of it), its
+/// reference count is above 1 and the next call gets a new array, so an array the user kept
+/// never changes. Saves two NumPy allocations a call (~0.2 us of ~0.3 us of overhead). Use
+/// with the GIL held.
+class ArgumentArray {
+ public:
+  py::handle Fill(const ConstVectorRef& v) {
+    PyObject* a = array_.ptr();
+    if (a == nullptr || Py_REFCNT(a) != 1 || !Reusable(a, v.size())) {
+      array_ = py::array_t<double>(v.size());
+      a = array_.ptr();
+    }
+    std::copy(v.data(), v.data() + v.size(),
+              reinterpret_cast<double*>(py::detail::array_proxy(a)->data));
+    return array_;
+  }
+  void Clear() { array_ = py::object(); }
+
+ private:
+  // Still an owning, writeable, contiguous (n,) float64 array (a callable may have changed
+  // its shape, dtype or flags in place before dropping it).
+  static bool Reusable(PyObject* a, Eigen::Index n) {
+    const auto* p = py::detail::array_proxy(a);
+    using api = py::detail::npy_api;
+    const int flags = api::NPY_ARRAY_C_CONTIGUOUS_ | api::NPY_ARRAY_OWNDATA_ |
+                      api::NPY_ARRAY_WRITEABLE_;
+    return p->nd == 1 && p->dimensions[0] == n && (p->flags & flags) == flags &&
+           py::detail::array_descriptor_proxy(p->descr)->type_num == api::NPY_DOUBLE_ &&
+           py::detail::array_descriptor_proxy(p->descr)->byteorder != '>';
+  }
+  py::object array_;
+};
+
+/// A per-point callable's result of `size` floats into `out`: a list or tuple of floats and a
+/// 1-D float64 array are read directly, anything else through AsVector (with its messages).
+void ReadVector(const py::handle& obj, const Callee& callee, Eigen::Index size, VectorRef out) {
+  PyObject* o = obj.ptr();
+  if ((PyList_CheckExact(o) || PyTuple_CheckExact(o)) && PySequence_Fast_GET_SIZE(o) == size) {
+    PyObject** items = PySequence_Fast_ITEMS(o);
+    Eigen::Index i = 0;
+    for (; i < size && PyFloat_Check(items[i]); ++i) out(i) = PyFloat_AsDouble(items[i]);
+    if (i == size) return;
+  } else if (py::isinstance<py::array_t<double>>(obj)) {
+    const auto a = py::reinterpret_borrow<py::array_t<double>>(obj);
+    if (a.ndim() == 1 && a.shape(0) == size) {
+      const auto r = a.unchecked<1>();
+      for (Eigen::Index i = 0; i < size; ++i) out(i) = r(i);
+      return;
+    }
+  }
+  out = AsVector(obj, callee.str() + " returned", size);
+}
+
+/// The N points X.col(j) (n x N, any stride) as an (N, n) float64 array, row j = point j.
+py::array_t<double> PointsToArray(const ConstMatrixRef& X) {
+  py::array_t<double> a(std::vector<py::ssize_t>{X.cols(), X.rows()});
+  double* out = a.mutable_data();
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    std::copy(X.col(j).data(), X.col(j).data() + X.rows(), out + j * X.rows());
+  }
+  return a;
+}
+
+/// One part of what a batch callable returned, as it must look: `ndim` 1 (N,), 2 (N, rows) or 3
+/// (N, rows, cols); `legend` names the axes in messages, e.g. "(N, n_k, m)".
+struct BatchPart {
+  const char* name;  ///< "" for a callable returning one array, else "FX", "lu", ...
+  int ndim;
+  Eigen::Index rows, cols;
+  const char* legend;
+};
+
+std::string PointString(const ConstMatrixRef& X, Eigen::Index j) {
+  std::ostringstream s;
+  s << "[";
+  for (Eigen::Index i = 0; i < X.rows(); ++i) s << (i ? ", " : "") << X(i, j);
+  s << "]";
+  return s.str();
+}
+
+/// Reads part `p` of what the batch callable `callee` returned at the N points (X, U) into
+/// `out`: 1 x N for ndim 1, rows x N for ndim 2 (column j = point j), rows x (cols N) for ndim 3
+/// (block j, columns j cols .., = point j's matrix). Errors name the callable, the part, a wrong
+/// type or dtype, both shapes, and the first non-finite entry with its point's x and u.
+void ReadBatch(const py::handle& obj, const Callee& callee, const BatchPart& p,
+               const ConstMatrixRef& X, const ConstMatrixRef& U, MatrixRef out) {
+  const Eigen::Index N = X.cols();
+  const std::string name =
+      callee.str() + " returned" + (p.name[0] != '\0' ? std::string(" ") + p.name : "");
+  if (!py::isinstance<py::array>(obj) && !py::isinstance<py::list>(obj) &&
+      !py::isinstance<py::tuple>(obj)) {
+    throw InvalidArgument(name + ": expected an array of shape " + p.legend + ", got " +
+                          std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  }
+  const py::array any = py::array::ensure(obj);
+  if (!any) throw InvalidArgument(name + ": not convertible to an array of floats");
+  const char kind = any.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    throw InvalidArgument(name + ": dtype " + std::string(py::str(any.dtype())) +
+                          ", expected real numbers (float64)");
+  }
+  std::vector<py::ssize_t> expected{N};
+  if (p.ndim >= 2) expected.push_back(p.rows);
+  if (p.ndim == 3) expected.push_back(p.cols);
+  bool same = any.ndim() == p.ndim;
+  for (int d = 0; same && d < p.ndim; ++d) same = any.shape(d) == expected[d];
+  if (!same) {
+    std::ostringstream e;
+    e << "(";
+    for (size_t d = 0; d < expected.size(); ++d) e << (d ? ", " : "") << expected[d];
+    e << (expected.size() == 1 ? ",)" : ")");
+    throw InvalidArgument(name + ": shape " + ShapeString(any) + ", expected " + e.str() + " " +
+                          p.legend + " for " + std::to_string(N) + " points");
+  }
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(any);
+  const double* v = a.data();
+  const Eigen::Index rows = p.ndim >= 2 ? p.rows : 1, cols = p.ndim == 3 ? p.cols : 1;
+  for (Eigen::Index j = 0; j < N; ++j) {
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      for (Eigen::Index c = 0; c < cols; ++c) {
+        const double x = v[(j * rows + r) * cols + c];
+        if (!std::isfinite(x)) {
+          std::ostringstream s;
+          s << name << ": non-finite value " << x << " at [" << j;
+          if (p.ndim >= 2) s << ", " << r;
+          if (p.ndim == 3) s << ", " << c;
+          s << "], point " << j << " of " << N << " (x = " << PointString(X, j)
+            << ", u = " << PointString(U, j) << ")";
+          throw InvalidArgument(s.str());
+        }
+        out(r, j * cols + c) = x;
+      }
+    }
+  }
+}
+
+/// The tuple (or list) of `parts` parts a batch callable returned.
+py::sequence BatchTuple(const py::object& obj, const Callee& callee, size_t parts,
+                        const char* names) {
+  if ((!py::isinstance<py::tuple>(obj) && !py::isinstance<py::list>(obj)) ||
+      py::len(obj) != parts) {
+    const std::string got = py::isinstance<py::tuple>(obj) || py::isinstance<py::list>(obj)
+                                ? "a sequence of length " + std::to_string(py::len(obj))
+                                : std::string(py::str(py::type::handle_of(obj).attr("__name__")));
+    throw InvalidArgument(callee.str() + " returned " + got + ", expected a tuple " + names);
+  }
+  return py::reinterpret_borrow<py::sequence>(obj);
+}
+
+/// `fn` if it is None or callable, else InvalidArgument naming the argument.
+py::object Callable(py::object fn, const char* name) {
+  if (!fn.is_none() && !PyCallable_Check(fn.ptr())) {
+    throw InvalidArgument(std::string(name) + ": expected a callable or None, got " +
+                          std::string(py::str(py::type::handle_of(fn).attr("__name__"))));
+  }
+  return fn;
+}
+
+/// Z = [X; U] (n + m x N), the points the finite differences perturb.
+Matrix Stacked(const ConstMatrixRef& X, const ConstMatrixRef& U) {
+  Matrix Z(X.rows() + U.rows(), X.cols());
+  Z.topRows(X.rows()) = X;
+  Z.bottomRows(U.rows()) = U;
+  return Z;
+}
+
+/// A one-point batch (n x 1) of the contiguous vector x.
+Eigen::Map<const Matrix> OnePoint(const ConstVectorRef& x) {
+  return Eigen::Map<const Matrix>(x.data(), x.size(), 1);
+}
+
+/// X (N, n) and U (N, m) given to a batch method as the engine's n x N and m x N points
+/// (n, m: -1 = any).
+std::pair<Matrix, Matrix> PointsFromArrays(const py::object& X, const py::object& U,
+                                           Eigen::Index n, Eigen::Index m) {
+  Matrix x = AsMatrix(X, "X", -1, n).transpose();
+  Matrix u = AsMatrix(U, "U", x.cols(), m).transpose();
+  return {std::move(x), std::move(u)};
+}
+
+/// The N blocks rows x cols of M (rows x cols N) as an (N, rows, cols) array.
+py::array_t<double> BlocksToArray(const ConstMatrixRef& M, Eigen::Index N, Eigen::Index rows,
+                                  Eigen::Index cols) {
+  py::array_t<double> a(std::vector<py::ssize_t>{N, rows, cols});
+  auto w = a.mutable_unchecked<3>();
+  for (Eigen::Index j = 0; j < N; ++j) {
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      for (Eigen::Index c = 0; c < cols; ++c) w(j, r, c) = M(r, j * cols + c);
+    }
+  }
+  return a;
+}
+
+/// A SwitchedSystem whose parts are Python callables (called with the GIL held). The flow is
+/// given per point (flow, flow_derivatives), batched over the points of a mode (flow_batch,
+/// flow_derivatives_batch: (N, n_k) arrays in and out), or both; with a batch callable the
+/// system prefers_batch(), so the backward pass calls it once per mode and Run. The simulation
+/// calls the flow per point (flow_batch with N = 1 when no flow is given).
 class CallbackSystem : public SwitchedSystem {
  public:
-  CallbackSystem(std::vector<int> state_dims, int input_dim, py::function flow, py::object reset,
+  CallbackSystem(std::vector<int> state_dims, int input_dim, py::object flow, py::object reset,
                  py::object flow_derivatives, py::object reset_derivative,
                  std::vector<int> surface_dims, py::object surface, py::object surface_derivative,
-                 bool cycle_reset, double fd_step)
+                 bool cycle_reset, double fd_step, py::object flow_batch,
+                 py::object flow_derivatives_batch)
       : SwitchedSystem(state_dims, input_dim, surface_dims, cycle_reset),
-        flow_(std::move(flow)), reset_(std::move(reset)),
-        flow_derivatives_(std::move(flow_derivatives)),
-        reset_derivative_(std::move(reset_derivative)), surface_(std::move(surface)),
-        surface_derivative_(std::move(surface_derivative)), fd_step_(fd_step) {
+        flow_(Callable(std::move(flow), "flow")), reset_(Callable(std::move(reset), "reset")),
+        flow_derivatives_(Callable(std::move(flow_derivatives), "flow_derivatives")),
+        reset_derivative_(Callable(std::move(reset_derivative), "reset_derivative")),
+        surface_(Callable(std::move(surface), "surface")),
+        surface_derivative_(Callable(std::move(surface_derivative), "surface_derivative")),
+        flow_batch_(Callable(std::move(flow_batch), "flow_batch")),
+        flow_derivatives_batch_(
+            Callable(std::move(flow_derivatives_batch), "flow_derivatives_batch")),
+        fd_step_(fd_step) {
     if (!(fd_step > 0) || !std::isfinite(fd_step)) {
       throw InvalidArgument("fd_step: " + std::to_string(fd_step) + ", expected finite and > 0");
+    }
+    if (flow_.is_none() && flow_batch_.is_none()) {
+      throw InvalidArgument(
+          "flow: give flow(k, x, u) -> xdot or flow_batch(k, X, U) -> Xdot (or both)");
     }
     bool has_surface = false;
     for (int s : surface_dims) has_surface = has_surface || s > 0;
@@ -291,8 +533,14 @@ class CallbackSystem : public SwitchedSystem {
 
   ~CallbackSystem() override {
     py::gil_scoped_acquire gil;
-    flow_ = py::function();
-    reset_ = flow_derivatives_ = reset_derivative_ = surface_ = surface_derivative_ = py::object();
+    flow_ = reset_ = flow_derivatives_ = reset_derivative_ = surface_ = surface_derivative_ =
+        flow_batch_ = flow_derivatives_batch_ = py::object();
+    x_arg_.Clear();
+    u_arg_.Clear();
+  }
+
+  bool prefers_batch() const override {
+    return !flow_batch_.is_none() || !flow_derivatives_batch_.is_none();
   }
 
  protected:
@@ -300,36 +548,66 @@ class CallbackSystem : public SwitchedSystem {
 
   void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
               VectorRef xdot) const override {
+    if (flow_.is_none()) {
+      Eigen::Map<Matrix> out(xdot.data(), xdot.size(), 1);
+      FlowBatchCall(k, OnePoint(x), OnePoint(u), out);
+      return;
+    }
     py::gil_scoped_acquire gil;
-    xdot = AsVector(flow_(k, ToArray(x), ToArray(u)), Indexed("flow", k) + " returned",
-                    state_dim(k));
+    const Callee c{"flow", k};
+    ReadVector(Call(flow_, c, x_arg_.Fill(x), u_arg_.Fill(u)), c, state_dim(k), xdot);
   }
   void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, MatrixRef fx,
                          MatrixRef fu) const override {
     if (!flow_derivatives_.is_none()) {
       py::gil_scoped_acquire gil;
-      const py::tuple r = flow_derivatives_(k, ToArray(x), ToArray(u));
-      if (r.size() != 2) throw InvalidArgument(Indexed("flow_derivatives", k) + ": expected (fx, fu)");
-      fx = AsMatrix(r[0], Indexed("flow_derivatives", k) + " fx", state_dim(k), state_dim(k));
-      fu = AsMatrix(r[1], Indexed("flow_derivatives", k) + " fu", state_dim(k), input_dim());
+      const Callee c{"flow_derivatives", k};
+      const py::tuple r = Call(flow_derivatives_, c, x_arg_.Fill(x), u_arg_.Fill(u));
+      if (r.size() != 2) throw InvalidArgument(c.str() + ": expected (fx, fu)");
+      fx = AsMatrix(r[0], c.str() + " fx", state_dim(k), state_dim(k));
+      fu = AsMatrix(r[1], c.str() + " fu", state_dim(k), input_dim());
       return;
     }
-    const Vector u0 = u, x0 = x;
-    fx = CentralDifferenceJacobian(
-        [&](const Vector& z) {
-          Vector out(state_dim(k));
-          DoFlow(k, z, u0, out);
-          return out;
-        },
-        x0, fd_step_);
-    if (input_dim() > 0) {
-      fu = CentralDifferenceJacobian(
-          [&](const Vector& z) {
-            Vector out(state_dim(k));
-            DoFlow(k, x0, z, out);
-            return out;
-          },
-          u0, fd_step_);
+    DoFlowDerivativesBatch(k, OnePoint(x), OnePoint(u), fx, fu);  // a batch of one point
+  }
+  void DoFlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                   MatrixRef F) const override {
+    if (flow_batch_.is_none()) return SwitchedSystem::DoFlowBatch(k, X, U, F);
+    FlowBatchCall(k, X, U, F);
+  }
+  void DoFlowDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                              MatrixRef FX, MatrixRef FU) const override {
+    const Eigen::Index n = X.rows(), m = U.rows(), N = X.cols();
+    if (!flow_derivatives_batch_.is_none()) {
+      py::gil_scoped_acquire gil;
+      const Callee c{"flow_derivatives_batch", k, N};
+      const py::sequence r = BatchTuple(
+          Call(flow_derivatives_batch_, c, PointsToArray(X), PointsToArray(U)), c,
+          2, "(FX, FU)");
+      ReadBatch(r[0], c, {"FX", 3, n, n, "(N, n_k, n_k)"}, X, U, FX);
+      ReadBatch(r[1], c, {"FU", 3, n, m, "(N, n_k, m)"}, X, U, FU);
+      return;
+    }
+    if (!flow_derivatives_.is_none()) {  // exact per point
+      return SwitchedSystem::DoFlowDerivativesBatch(k, X, U, FX, FU);
+    }
+    // Central differences of the flow in z = [x; u] (CentralDifferenceJacobian's points and
+    // quotients), the perturbed points of all N points evaluated together: one flow_batch
+    // call, or flow per point.
+    const Matrix Z = Stacked(X, U);
+    const Matrix P = CentralDifferencePoints(Z, fd_step_);
+    Matrix V(n, P.cols());
+    if (!flow_batch_.is_none()) {
+      FlowBatchCall(k, P.topRows(n), P.bottomRows(m), V);
+    } else {
+      for (Eigen::Index j = 0; j < P.cols(); ++j) {
+        DoFlow(k, P.col(j).head(n), P.col(j).tail(m), V.col(j));
+      }
+    }
+    const Matrix J = CentralDifferenceQuotients(Z, V, fd_step_);
+    for (Eigen::Index j = 0; j < N; ++j) {
+      FX.middleCols(j * n, n) = J.middleCols(j * (n + m), n);
+      FU.middleCols(j * m, m) = J.middleCols(j * (n + m) + n, m);
     }
   }
   void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
@@ -341,7 +619,8 @@ class CallbackSystem : public SwitchedSystem {
       return;
     }
     py::gil_scoped_acquire gil;
-    x_next = AsVector(reset_(k, ToArray(x)), Indexed("reset", k) + " returned", NextDim(k));
+    const Callee c{"reset", k};
+    ReadVector(Call(reset_, c, x_arg_.Fill(x)), c, NextDim(k), x_next);
   }
   void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const override {
     if (reset_.is_none()) {
@@ -353,7 +632,8 @@ class CallbackSystem : public SwitchedSystem {
     }
     if (!reset_derivative_.is_none()) {
       py::gil_scoped_acquire gil;
-      gx = AsMatrix(reset_derivative_(k, ToArray(x)), Indexed("reset_derivative", k) + " returned",
+      const Callee c{"reset_derivative", k};
+      gx = AsMatrix(Call(reset_derivative_, c, x_arg_.Fill(x)), c.str() + " returned",
                     NextDim(k), state_dim(k));
       return;
     }
@@ -367,13 +647,15 @@ class CallbackSystem : public SwitchedSystem {
   }
   void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override {
     py::gil_scoped_acquire gil;
-    h = AsVector(surface_(k, ToArray(x)), Indexed("surface", k) + " returned", surface_dim(k));
+    const Callee c{"surface", k};
+    ReadVector(Call(surface_, c, x_arg_.Fill(x)), c, surface_dim(k), h);
   }
   void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const override {
     if (!surface_derivative_.is_none()) {
       py::gil_scoped_acquire gil;
-      hx = AsMatrix(surface_derivative_(k, ToArray(x)),
-                    Indexed("surface_derivative", k) + " returned", surface_dim(k), state_dim(k));
+      const Callee c{"surface_derivative", k};
+      hx = AsMatrix(Call(surface_derivative_, c, x_arg_.Fill(x)), c.str() + " returned",
+                    surface_dim(k), state_dim(k));
       return;
     }
     hx = CentralDifferenceJacobian(
@@ -386,39 +668,74 @@ class CallbackSystem : public SwitchedSystem {
   }
 
  private:
-  py::function flow_;
-  py::object reset_, flow_derivatives_, reset_derivative_, surface_, surface_derivative_;
+  // flow_batch at the N points (X, U) into F (n_k x N).
+  void FlowBatchCall(int k, const ConstMatrixRef& X, const ConstMatrixRef& U, MatrixRef F) const {
+    py::gil_scoped_acquire gil;
+    const Callee c{"flow_batch", k, X.cols()};
+    const py::object r = Call(flow_batch_, c, PointsToArray(X), PointsToArray(U));
+    ReadBatch(r, c, {"", 2, X.rows(), 1, "(N, n_k)"}, X, U, F);
+  }
+
+  py::object flow_, reset_, flow_derivatives_, reset_derivative_, surface_, surface_derivative_;
+  py::object flow_batch_, flow_derivatives_batch_;
+  mutable ArgumentArray x_arg_, u_arg_;  // the x and u of the per-point callables
   double fd_step_;
 };
 
-/// A SwitchedCost whose parts are Python callables. Missing derivatives: the gradient by
-/// central differences of the value (step fd_step), the Hessian by central differences of that
-/// gradient (step fd_hessian_step), symmetrized.
+/// A SwitchedCost whose parts are Python callables. The running cost per point (running,
+/// running_derivatives), batched (running_batch, running_derivatives_batch), or both; with a
+/// batch callable the cost prefers_batch() (the backward pass and EvaluateCost call it once per
+/// mode). Missing derivatives: the gradient by central differences of the value (step fd_step),
+/// the Hessian by central differences of that gradient (step fd_hessian_step), symmetrized;
+/// with running_batch only, all of a mode's perturbed points in one call.
 class CallbackCost : public SwitchedCost {
  public:
-  CallbackCost(py::function running, py::object switching, py::object running_derivatives,
-               py::object switching_derivatives, double fd_step, double fd_hessian_step)
-      : running_(std::move(running)), switching_(std::move(switching)),
-        running_derivatives_(std::move(running_derivatives)),
-        switching_derivatives_(std::move(switching_derivatives)), fd_step_(fd_step),
-        fd_hessian_step_(fd_hessian_step) {
+  CallbackCost(py::object running, py::object switching, py::object running_derivatives,
+               py::object switching_derivatives, double fd_step, double fd_hessian_step,
+               py::object running_batch, py::object running_derivatives_batch)
+      : running_(Callable(std::move(running), "running")),
+        switching_(Callable(std::move(switching), "switching")),
+        running_derivatives_(Callable(std::move(running_derivatives), "running_derivatives")),
+        switching_derivatives_(
+            Callable(std::move(switching_derivatives), "switching_derivatives")),
+        running_batch_(Callable(std::move(running_batch), "running_batch")),
+        running_derivatives_batch_(
+            Callable(std::move(running_derivatives_batch), "running_derivatives_batch")),
+        fd_step_(fd_step), fd_hessian_step_(fd_hessian_step) {
     for (double h : {fd_step, fd_hessian_step}) {
       if (!(h > 0) || !std::isfinite(h)) {
         throw InvalidArgument("fd_step / fd_hessian_step: " + std::to_string(h) +
                               ", expected finite and > 0");
       }
     }
+    if (running_.is_none() && running_batch_.is_none()) {
+      throw InvalidArgument(
+          "running: give running(k, x, u) -> float or running_batch(k, X, U) -> l (or both)");
+    }
   }
   ~CallbackCost() override {
     py::gil_scoped_acquire gil;
-    running_ = py::function();
-    switching_ = running_derivatives_ = switching_derivatives_ = py::object();
+    running_ = switching_ = running_derivatives_ = switching_derivatives_ = running_batch_ =
+        running_derivatives_batch_ = py::object();
+    x_arg_.Clear();
+    u_arg_.Clear();
+  }
+
+  bool prefers_batch() const override {
+    return !running_batch_.is_none() || !running_derivatives_batch_.is_none();
   }
 
  protected:
   double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    if (running_.is_none()) {
+      double l = 0;
+      Eigen::Map<Vector> out(&l, 1);
+      RunningBatchCall(k, OnePoint(x), OnePoint(u), out);
+      return l;
+    }
     py::gil_scoped_acquire gil;
-    return AsFloat(running_(k, ToArray(x), ToArray(u)), Indexed("running", k) + " returned");
+    const Callee c{"running", k};
+    return AsFloat(Call(running_, c, x_arg_.Fill(x), u_arg_.Fill(u)), c.str() + " returned");
   }
   void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
                             VectorRef lu, MatrixRef lxx, MatrixRef luu,
@@ -426,8 +743,9 @@ class CallbackCost : public SwitchedCost {
     const auto n = x.size(), m = u.size();
     if (!running_derivatives_.is_none()) {
       py::gil_scoped_acquire gil;
-      const std::string name = Indexed("running_derivatives", k);
-      const py::tuple r = running_derivatives_(k, ToArray(x), ToArray(u));
+      const Callee c{"running_derivatives", k};
+      const std::string name = c.str();
+      const py::tuple r = Call(running_derivatives_, c, x_arg_.Fill(x), u_arg_.Fill(u));
       if (r.size() != 5) throw InvalidArgument(name + ": expected (lx, lu, lxx, luu, lux)");
       lx = AsVector(r[0], name + " lx", n);
       lu = AsVector(r[1], name + " lu", m);
@@ -436,27 +754,72 @@ class CallbackCost : public SwitchedCost {
       lux = AsMatrix(r[4], name + " lux", m, n);
       return;
     }
-    Vector z(n + m);
-    z << x, u;
-    auto value = [&](const Vector& w) {
-      return Vector::Constant(1, DoRunning(k, w.head(n), w.tail(m)));
-    };
-    auto gradient = [&](const Vector& w) -> Vector {
-      return CentralDifferenceJacobian(value, w, fd_step_).transpose();
-    };
-    const Vector g = gradient(z);
-    Matrix H = CentralDifferenceJacobian(gradient, z, fd_hessian_step_);
-    H = 0.5 * (H + H.transpose()).eval();
-    lx = g.head(n);
-    lu = g.tail(m);
-    lxx = H.topLeftCorner(n, n);
-    luu = H.bottomRightCorner(m, m);
-    lux = H.bottomLeftCorner(m, n);
+    Eigen::Map<Matrix> LX(lx.data(), n, 1), LU(lu.data(), m, 1);  // a batch of one point
+    DoRunningDerivativesBatch(k, OnePoint(x), OnePoint(u), LX, LU, lxx, luu, lux);
+  }
+  void DoRunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                      VectorRef l) const override {
+    if (running_batch_.is_none()) return SwitchedCost::DoRunningBatch(k, X, U, l);
+    RunningBatchCall(k, X, U, l);
+  }
+  void DoRunningDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                 MatrixRef LX, MatrixRef LU, MatrixRef LXX, MatrixRef LUU,
+                                 MatrixRef LUX) const override {
+    const Eigen::Index n = X.rows(), m = U.rows(), N = X.cols(), r = n + m;
+    if (!running_derivatives_batch_.is_none()) {
+      py::gil_scoped_acquire gil;
+      const Callee c{"running_derivatives_batch", k, N};
+      const py::sequence out = BatchTuple(
+          Call(running_derivatives_batch_, c, PointsToArray(X), PointsToArray(U)),
+          c, 5, "(LX, LU, LXX, LUU, LUX)");
+      ReadBatch(out[0], c, {"LX", 2, n, 1, "(N, n_k)"}, X, U, LX);
+      ReadBatch(out[1], c, {"LU", 2, m, 1, "(N, m)"}, X, U, LU);
+      ReadBatch(out[2], c, {"LXX", 3, n, n, "(N, n_k, n_k)"}, X, U, LXX);
+      ReadBatch(out[3], c, {"LUU", 3, m, m, "(N, m, m)"}, X, U, LUU);
+      ReadBatch(out[4], c, {"LUX", 3, m, n, "(N, m, n_k)"}, X, U, LUX);
+      return;
+    }
+    if (!running_derivatives_.is_none()) {  // exact per point
+      return SwitchedCost::DoRunningDerivativesBatch(k, X, U, LX, LU, LXX, LUU, LUX);
+    }
+    // Central differences (CentralDifferenceJacobian's points and quotients): the gradient of
+    // the value at z = [x; u] (points P1) and, for the Hessian, the gradient at the points Zh
+    // (points P2), all of them evaluated together: one running_batch call, or running per point.
+    const Matrix Z = Stacked(X, U);
+    const Matrix P1 = CentralDifferencePoints(Z, fd_step_);
+    const Matrix Zh = CentralDifferencePoints(Z, fd_hessian_step_);
+    const Matrix P2 = CentralDifferencePoints(Zh, fd_step_);
+    Matrix P(r, P1.cols() + P2.cols());
+    P << P1, P2;
+    Vector v(P.cols());
+    if (!running_batch_.is_none()) {
+      RunningBatchCall(k, P.topRows(n), P.bottomRows(m), v);
+    } else {
+      for (Eigen::Index j = 0; j < P.cols(); ++j) {
+        v(j) = DoRunning(k, P.col(j).head(n), P.col(j).tail(m));
+      }
+    }
+    const Matrix g = CentralDifferenceQuotients(Z, v.head(P1.cols()).transpose(), fd_step_);
+    const Matrix G = CentralDifferenceQuotients(Zh, v.tail(P2.cols()).transpose(), fd_step_);
+    // G (1 x r 2rN) holds the gradient at Zh.col(c) in columns c r ..: an r x 2rN matrix.
+    const Matrix H = CentralDifferenceQuotients(
+        Z, Eigen::Map<const Matrix>(G.data(), r, Zh.cols()), fd_hessian_step_);
+    Matrix Hj(r, r);
+    for (Eigen::Index j = 0; j < N; ++j) {
+      Hj = H.middleCols(j * r, r);
+      Hj = 0.5 * (Hj + Hj.transpose()).eval();
+      LX.col(j) = g.middleCols(j * r, n).transpose();
+      LU.col(j) = g.middleCols(j * r + n, m).transpose();
+      LXX.middleCols(j * n, n) = Hj.topLeftCorner(n, n);
+      LUU.middleCols(j * m, m) = Hj.bottomRightCorner(m, m);
+      LUX.middleCols(j * n, n) = Hj.bottomLeftCorner(m, n);
+    }
   }
   double DoSwitching(int k, const ConstVectorRef& x) const override {
     if (switching_.is_none()) return 0.0;
     py::gil_scoped_acquire gil;
-    return AsFloat(switching_(k, ToArray(x)), Indexed("switching", k) + " returned");
+    const Callee c{"switching", k};
+    return AsFloat(Call(switching_, c, x_arg_.Fill(x)), c.str() + " returned");
   }
   void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
                               MatrixRef phixx) const override {
@@ -468,8 +831,9 @@ class CallbackCost : public SwitchedCost {
     }
     if (!switching_derivatives_.is_none()) {
       py::gil_scoped_acquire gil;
-      const std::string name = Indexed("switching_derivatives", k);
-      const py::tuple r = switching_derivatives_(k, ToArray(x));
+      const Callee c{"switching_derivatives", k};
+      const std::string name = c.str();
+      const py::tuple r = Call(switching_derivatives_, c, x_arg_.Fill(x));
       if (r.size() != 2) throw InvalidArgument(name + ": expected (phix, phixx)");
       phix = AsVector(r[0], name + " phix", n);
       phixx = AsMatrix(r[1], name + " phixx", n, n);
@@ -485,8 +849,19 @@ class CallbackCost : public SwitchedCost {
   }
 
  private:
-  py::function running_;
-  py::object switching_, running_derivatives_, switching_derivatives_;
+  // running_batch at the N points (X, U) into l (N).
+  void RunningBatchCall(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                        VectorRef l) const {
+    py::gil_scoped_acquire gil;
+    const Callee c{"running_batch", k, X.cols()};
+    const py::object r = Call(running_batch_, c, PointsToArray(X), PointsToArray(U));
+    Eigen::Map<Matrix> out(l.data(), 1, l.size());
+    ReadBatch(r, c, {"", 1, 1, 1, "(N,)"}, X, U, out);
+  }
+
+  py::object running_, switching_, running_derivatives_, switching_derivatives_;
+  py::object running_batch_, running_derivatives_batch_;
+  mutable ArgumentArray x_arg_, u_arg_;  // the x and u of the per-point callables
   double fd_step_, fd_hessian_step_;
 };
 
@@ -632,6 +1007,19 @@ class PyLearner {
     Plant& cost_plant = user_plant ? *user_plant : real ? static_cast<Plant&>(*real) : model;
     Plant& direction_plant = method == "mrl" ? static_cast<Plant&>(model) : cost_plant;
     const bool same = &direction_plant == &cost_plant;
+    // A ModelPlant of a CallbackSystem spends its run in the flow's Python calls (four per RK4
+    // step): it runs with the GIL held instead of taking it for each call (~70 ns of ~130 ns of
+    // a call's overhead); the learner's C++ work between runs goes on without the GIL.
+    const auto python_model = [&](const Plant& plant) {
+      const SwitchedSystem* s = &plant == &model ? problem.system
+                                : &plant == real.get() ? plant_system : nullptr;
+      return dynamic_cast<const CallbackSystem*>(s) != nullptr;
+    };
+    const auto run = [&](Plant& plant, Policy& policy, Trajectory* out) {
+      if (!python_model(plant)) return plant.Run(x0, policy, out);
+      py::gil_scoped_acquire gil;
+      plant.Run(x0, policy, out);
+    };
     Learner& learner = *learner_;
     // Learner::Solve's loop, one trial per GIL release.
     PySolveResult out;
@@ -651,12 +1039,12 @@ class PyLearner {
     try {
       {
         py::gil_scoped_release release;
-        cost_plant.Run(x0, initial_policy, &measured);
+        run(cost_plant, initial_policy, &measured);
         if (same) {
           learner.ReserveSamples(measured.total_samples());
           learner.Initialize(measured);
         } else {
-          direction_plant.Run(x0, initial_policy, &direction);
+          run(direction_plant, initial_policy, &direction);
           learner.ReserveSamples(std::max(measured.total_samples(), direction.total_samples()));
           learner.Initialize(measured, &direction);
         }
@@ -669,7 +1057,7 @@ class PyLearner {
         {
           py::gil_scoped_release release;
           OnlineController& policy = learner.NextTrial();
-          cost_plant.Run(x0, policy, &measured);
+          run(cost_plant, policy, &measured);
           r = learner.CompleteTrial(measured, same ? nullptr : &direction_plant);
         }
         if (r.accepted) result.cost_history.push_back(learner.nominal_cost());
@@ -812,7 +1200,34 @@ class SolveInterrupted(KeyboardInterrupt):
             s.Reset(k, AsVector(x, "x", s.state_dim(k)), xn);
             return xn;
           },
-          py::arg("k"), py::arg("x"), "x+ = g_k(x).");
+          py::arg("k"), py::arg("x"), "x+ = g_k(x).")
+      .def_property_readonly("prefers_batch", &SwitchedSystem::prefers_batch,
+                             "True when the backward pass evaluates the flow once per mode "
+                             "(a CallbackSystem with a batch callable).")
+      .def(
+          "flow_batch",
+          [](const SwitchedSystem& s, int k, const py::object& X, const py::object& U) {
+            if (k < 0 || k >= s.num_modes()) throw InvalidArgument("k: out of range");
+            const auto [x, u] = PointsFromArrays(X, U, s.state_dim(k), s.input_dim());
+            Matrix F(x.rows(), x.cols());
+            s.FlowBatch(k, x, u, F);
+            return Matrix(F.transpose());
+          },
+          py::arg("k"), py::arg("X"), py::arg("U"),
+          "Xdot (N, n_k): f_k at the N points, rows of X (N, n_k) and U (N, m).")
+      .def(
+          "flow_derivatives_batch",
+          [](const SwitchedSystem& s, int k, const py::object& X, const py::object& U) {
+            if (k < 0 || k >= s.num_modes()) throw InvalidArgument("k: out of range");
+            const int n = s.state_dim(k), m = s.input_dim();
+            const auto [x, u] = PointsFromArrays(X, U, n, m);
+            const Eigen::Index N = x.cols();
+            Matrix FX(n, n * N), FU(n, m * N);
+            s.FlowDerivativesBatch(k, x, u, FX, FU);
+            return py::make_tuple(BlocksToArray(FX, N, n, n), BlocksToArray(FU, N, n, m));
+          },
+          py::arg("k"), py::arg("X"), py::arg("U"),
+          "(FX (N, n_k, n_k), FU (N, n_k, m)): df_k/dx and df_k/du at the N points.");
 
   py::class_<LinearSystem, SwitchedSystem>(
       mod, "LinearSystem",
@@ -834,7 +1249,34 @@ class SolveInterrupted(KeyboardInterrupt):
           [](const SwitchedCost& c, int k, const py::object& x) {
             return c.Switching(k, AsVector(x, "x"));
           },
-          py::arg("k"), py::arg("x"));
+          py::arg("k"), py::arg("x"))
+      .def_property_readonly("prefers_batch", &SwitchedCost::prefers_batch,
+                             "True when the backward pass and the cost evaluation evaluate the "
+                             "running cost once per mode (a CallbackCost with a batch callable).")
+      .def(
+          "running_batch",
+          [](const SwitchedCost& c, int k, const py::object& X, const py::object& U) {
+            const auto [x, u] = PointsFromArrays(X, U, -1, -1);
+            Vector l(x.cols());
+            c.RunningBatch(k, x, u, l);
+            return l;
+          },
+          py::arg("k"), py::arg("X"), py::arg("U"),
+          "l (N,): l_k at the N points, rows of X (N, n_k) and U (N, m).")
+      .def(
+          "running_derivatives_batch",
+          [](const SwitchedCost& c, int k, const py::object& X, const py::object& U) {
+            const auto [x, u] = PointsFromArrays(X, U, -1, -1);
+            const Eigen::Index n = x.rows(), m = u.rows(), N = x.cols();
+            Matrix LX(n, N), LU(m, N), LXX(n, n * N), LUU(m, m * N), LUX(m, n * N);
+            c.RunningDerivativesBatch(k, x, u, LX, LU, LXX, LUU, LUX);
+            return py::make_tuple(Matrix(LX.transpose()), Matrix(LU.transpose()),
+                                  BlocksToArray(LXX, N, n, n), BlocksToArray(LUU, N, m, m),
+                                  BlocksToArray(LUX, N, m, n));
+          },
+          py::arg("k"), py::arg("X"), py::arg("U"),
+          "(LX (N, n_k), LU (N, m), LXX (N, n_k, n_k), LUU (N, m, m), LUX (N, m, n_k)) at the N "
+          "points.");
 
   py::class_<QuadraticTrackingCost, SwitchedCost>(
       mod, "QuadraticCost",
@@ -851,27 +1293,39 @@ class SolveInterrupted(KeyboardInterrupt):
       "(None: identity); optional flow_derivatives(k, x, u) -> (fx, fu), reset_derivative(k, x) "
       "-> gx, surface(k, x) -> h (s_k entries), surface_derivative(k, x) -> hx. Derivatives not "
       "given are central differences (ddoc's CentralDifferenceJacobian, step fd_step * max(1, "
-      "|x_i|)).")
-      .def(py::init<std::vector<int>, int, py::function, py::object, py::object, py::object,
-                    std::vector<int>, py::object, py::object, bool, double>(),
-           py::arg("state_dims"), py::arg("input_dim"), py::arg("flow"),
+      "|x_i|)). Batched form (instead of or beside flow): flow_batch(k, X, U) -> Xdot with X "
+      "(N, n_k), U (N, m), Xdot (N, n_k), and flow_derivatives_batch(k, X, U) -> (FX (N, n_k, "
+      "n_k), FU (N, n_k, m)): the backward pass then calls them once per mode (the finite "
+      "differences of flow_batch in one call with all the perturbed points); the simulation "
+      "calls flow per point (flow_batch with N = 1 when flow is None).")
+      .def(py::init<std::vector<int>, int, py::object, py::object, py::object, py::object,
+                    std::vector<int>, py::object, py::object, bool, double, py::object,
+                    py::object>(),
+           py::arg("state_dims"), py::arg("input_dim"), py::arg("flow") = py::none(),
            py::arg("reset") = py::none(), py::arg("flow_derivatives") = py::none(),
            py::arg("reset_derivative") = py::none(),
            py::arg("surface_dims") = std::vector<int>(), py::arg("surface") = py::none(),
            py::arg("surface_derivative") = py::none(), py::arg("cycle_reset") = false,
-           py::arg("fd_step") = 1e-6);
+           py::arg("fd_step") = 1e-6, py::arg("flow_batch") = py::none(),
+           py::arg("flow_derivatives_batch") = py::none());
 
   py::class_<CallbackCost, SwitchedCost>(
       mod, "CallbackCost",
       "A cost given by Python callables: running(k, x, u) -> float, switching(k, x) -> float "
       "(None: 0); optional running_derivatives(k, x, u) -> (lx, lu, lxx, luu, lux) and "
       "switching_derivatives(k, x) -> (phix, phixx). Missing derivatives: gradient by central "
-      "differences (fd_step), Hessian by central differences of that gradient (fd_hessian_step).")
-      .def(py::init<py::function, py::object, py::object, py::object, double, double>(),
-           py::arg("running"), py::arg("switching") = py::none(),
+      "differences (fd_step), Hessian by central differences of that gradient (fd_hessian_step). "
+      "Batched form (instead of or beside running): running_batch(k, X, U) -> l (N,) and "
+      "running_derivatives_batch(k, X, U) -> (LX (N, n_k), LU (N, m), LXX (N, n_k, n_k), LUU "
+      "(N, m, m), LUX (N, m, n_k)), called once per mode by the backward pass and the cost "
+      "evaluation.")
+      .def(py::init<py::object, py::object, py::object, py::object, double, double, py::object,
+                    py::object>(),
+           py::arg("running") = py::none(), py::arg("switching") = py::none(),
            py::arg("running_derivatives") = py::none(),
            py::arg("switching_derivatives") = py::none(), py::arg("fd_step") = 1e-6,
-           py::arg("fd_hessian_step") = 1e-4);
+           py::arg("fd_hessian_step") = 1e-4, py::arg("running_batch") = py::none(),
+           py::arg("running_derivatives_batch") = py::none());
 
   py::class_<Problem>(mod, "Problem",
                       "The problem (9)-(10): a system, its cost, bounds and surface weights w_k "

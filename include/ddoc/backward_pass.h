@@ -226,6 +226,9 @@ class BackwardPass {
   };
   // Stage state and derivative.
   void Evaluate(int k, const Trajectory& nominal, int j, const Matrix* du_prev);
+  // The coefficients of every interval of the nominal by one batch call per mode (the system's
+  // and/or the cost's, those that prefer_batch()), for Evaluate to read in every sweep.
+  void EvaluateBatch(const Trajectory& nominal);
   bool FreeSet(int n, const ConstMatrixRef& P, const ConstVectorRef& p);
   // FreeSet of a mode of zero duration (kRiccati): no free input, the Hamiltonian's minimizer.
   bool VanishedStep(int n, const ConstVectorRef& p);
@@ -268,6 +271,8 @@ class BackwardPass {
   Interval c_;
   struct Sparsity;                      // the nonzero patterns of c_.fx and c_.fu (the .cc's)
   std::unique_ptr<Sparsity> sparsity_;
+  struct Batch;  // EvaluateBatch's coefficients of all intervals (the .cc's); null: per point
+  std::unique_ptr<Batch> batch_;
   const Matrix* du_prev_ = nullptr;
   int du_index_ = 0;
   Vector xmid_;             // n_max

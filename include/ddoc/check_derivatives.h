@@ -20,6 +20,19 @@ namespace ddoc {
 Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
                                  const ConstVectorRef& x, double step = 1e-6);
 
+/// The points at which CentralDifferenceJacobian evaluates fn, for each column z of Z (n x N)
+/// at once: columns 2 (j n + i) and 2 (j n + i) + 1 are Z.col(j) + h_i e_i and Z.col(j) - h_i e_i,
+/// h_i = step * max(1, |Z(i, j)|) (n x 2nN). With CentralDifferenceQuotients, the Jacobians of
+/// a function evaluated at all the points in one call (a batch of Python points). Throws
+/// InvalidArgument when step is not finite and > 0.
+Matrix CentralDifferencePoints(const ConstMatrixRef& Z, double step = 1e-6);
+
+/// The Jacobians from the values V (r x 2nN) of fn at CentralDifferencePoints(Z, step): J (r x
+/// nN), columns j n .. j n + n - 1 the Jacobian at Z.col(j), bitwise CentralDifferenceJacobian's
+/// for the same values. Throws InvalidArgument when V has the wrong number of columns.
+Matrix CentralDifferenceQuotients(const ConstMatrixRef& Z, const ConstMatrixRef& V,
+                                  double step = 1e-6);
+
 /// max_ij |a - b| / max(1, max_ij |b|): the relative error CheckDerivatives reports (b is the
 /// reference, e.g. the central differences). Throws InvalidArgument when the sizes differ.
 double RelativeError(const ConstMatrixRef& a, const ConstMatrixRef& b);

@@ -67,6 +67,19 @@ class SwitchedSystem {
   /// BackwardPassSettings::terminal_event. Unlike Surface, it adds no cost.
   bool GuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef hx) const;
 
+  /// Whole-mode evaluation, for systems whose per-point call is expensive (Python callables):
+  /// true asks the backward pass to evaluate the flow and its derivatives at all the intervals
+  /// of a mode with one FlowBatch and one FlowDerivativesBatch call per Run (not per point and
+  /// sweep). Default false: the engine calls Flow / FlowDerivatives per point.
+  virtual bool prefers_batch() const { return false; }
+  /// F.col(j) = f_k(X.col(j), U.col(j)) for the N = X.cols() points: X n_k x N, U m x N,
+  /// F n_k x N. The default is DoFlow per point.
+  void FlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U, MatrixRef F) const;
+  /// Block j of FX (n_k x n_k N, columns j n_k .. j n_k + n_k - 1) = df_k/dx at point j, of FU
+  /// (n_k x m N, columns j m ..) = df_k/du. The default is DoFlowDerivatives per point.
+  void FlowDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U, MatrixRef FX,
+                            MatrixRef FU) const;
+
  protected:
   /// state_dims: n_k for each mode (non-empty, each > 0); input_dim: m >= 0 (0: no inputs,
   /// pure switching-time optimization);
@@ -84,6 +97,12 @@ class SwitchedSystem {
   virtual void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const;
   virtual bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
                                VectorRef hx) const;
+  /// Called with checked sizes and finite X, U. Default: DoFlow per column.
+  virtual void DoFlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                           MatrixRef F) const;
+  /// Called with checked sizes and finite X, U. Default: DoFlowDerivatives per column.
+  virtual void DoFlowDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                      MatrixRef FX, MatrixRef FU) const;
 
  private:
   std::vector<int> state_dims_;    // n_k, size K
@@ -116,6 +135,20 @@ class SwitchedCost {
   /// phix (n_k), phixx (n_k x n_k).
   void SwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix, MatrixRef phixx) const;
 
+  /// Whole-mode evaluation (see SwitchedSystem::prefers_batch): true asks the backward pass and
+  /// EvaluateCost to evaluate the running cost and its derivatives at all the points of a mode
+  /// with one RunningBatch / RunningDerivativesBatch call. Default false: per point.
+  virtual bool prefers_batch() const { return false; }
+  /// l(j) = l_k(X.col(j), U.col(j)) for the N = X.cols() points: X n_k x N, U m x N, l N.
+  /// The default is DoRunning per point.
+  void RunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U, VectorRef l) const;
+  /// Per point j: LX.col(j) = l_x (LX n x N), LU.col(j) = l_u (m x N), and blocks j of LXX
+  /// (n x n N, columns j n ..) = l_xx, LUU (m x m N, columns j m ..) = l_uu, LUX (m x n N,
+  /// columns j n ..) = l_ux. The default is DoRunningDerivatives per point.
+  void RunningDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                               MatrixRef LX, MatrixRef LU, MatrixRef LXX, MatrixRef LUU,
+                               MatrixRef LUX) const;
+
  protected:
   virtual double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const = 0;
   virtual void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u,
@@ -124,6 +157,13 @@ class SwitchedCost {
   virtual double DoSwitching(int k, const ConstVectorRef& x) const = 0;
   virtual void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
                                       MatrixRef phixx) const = 0;
+  /// Called with checked sizes and finite X, U. Default: DoRunning per column.
+  virtual void DoRunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                              VectorRef l) const;
+  /// Called with checked sizes and finite X, U. Default: DoRunningDerivatives per column.
+  virtual void DoRunningDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                         MatrixRef LX, MatrixRef LU, MatrixRef LXX,
+                                         MatrixRef LUU, MatrixRef LUX) const;
 };
 
 }  // namespace ddoc

@@ -21,6 +21,38 @@ struct BackwardPass::Sparsity {
   bool full = false;   // this mode's patterns are full for the rest of the sweep
 };
 
+// The coefficients of all the intervals of a Run, evaluated by whole-mode batch calls when the
+// system (system = true) or the cost (cost = true) prefers_batch(). Mode k's intervals j = 0 ..
+// N_k - 2 are the columns of n_k-row blocks starting at its first sample s0 = index(k, 0):
+// mode k's part of a quantity with r rows per interval (at most r_max) is the r x (N_k - 1)
+// matrix at data() + s0 r_max (columns of r entries, so mode k needs no more than its samples'
+// share).
+struct BackwardPass::Batch {
+  bool system = false, cost = false;
+  Vector x;    // n_max S: the intervals' midpoints (x_j + x_{j+1}) / 2
+  Vector f;    // n_max S: f_k
+  Vector fx;   // n_max^2 S: f_x, n x n per interval
+  Vector fu;   // n_max m S: f_u, n x m
+  Vector l;    // S: l_k
+  Vector lx;   // n_max S
+  Vector lu;   // m S
+  Vector lxx;  // n_max^2 S
+  Vector luu;  // m^2 S
+  Vector lux;  // m n_max S: m x n per interval
+  // Mode k's rows x (N_k - 1) block of `v` (r_max rows per sample at most).
+  static Eigen::Map<Matrix> Block(Vector& v, int r_max, int s0, int rows, int cols) {
+    return Eigen::Map<Matrix>(v.data() + static_cast<Eigen::Index>(s0) * r_max, rows, cols);
+  }
+  // Interval j's rows x cols entries of `v` in mode k (first sample s0).
+  static Eigen::Map<const Matrix> At(const Vector& v, int r_max, int s0, int j, int rows,
+                                     int cols) {
+    return Eigen::Map<const Matrix>(
+        v.data() + static_cast<Eigen::Index>(s0) * r_max +
+            static_cast<Eigen::Index>(j) * rows * cols,
+        rows, cols);
+  }
+};
+
 BackwardPass::BackwardPass() : sparsity_(std::make_unique<Sparsity>()) {}
 BackwardPass::~BackwardPass() = default;
 
@@ -141,6 +173,28 @@ void BackwardPass::Allocate(const Problem& problem, int max_samples,
   cyclic_valid_ = false;
   valid_ = false;
   total_substeps_ = 0;
+  batch_.reset();
+  if (sys.prefers_batch() || problem.cost->prefers_batch()) {
+    batch_ = std::make_unique<Batch>();
+    Batch& b = *batch_;
+    b.system = sys.prefers_batch();
+    b.cost = problem.cost->prefers_batch();
+    const Eigen::Index S = max_samples, n = n_max_, m = m_;
+    b.x.setZero(n * S);
+    if (b.system) {
+      b.f.setZero(n * S);
+      b.fx.setZero(n * n * S);
+      b.fu.setZero(n * m * S);
+    }
+    if (b.cost) {
+      b.l.setZero(S);
+      b.lx.setZero(n * S);
+      b.lu.setZero(m * S);
+      b.lxx.setZero(n * n * S);
+      b.luu.setZero(m * m * S);
+      b.lux.setZero(m * n * S);
+    }
+  }
 }
 
 Eigen::Map<const Matrix> BackwardPass::P(int k, int j) const {
@@ -222,8 +276,16 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   auto f = c_.f.head(n);
   auto fx = c_.fx.topLeftCorner(n, n);
   auto fu = c_.fu.topRows(n);
-  sys.Flow(k, xm, u, f);
-  sys.FlowDerivatives(k, xm, u, fx, fu);
+  const int s0 = index(k, 0);
+  if (batch_ && batch_->system) {  // EvaluateBatch's values at this interval's midpoint
+    const int nm = n_max_;
+    f = Batch::At(batch_->f, nm, s0, j, n, 1);
+    fx = Batch::At(batch_->fx, nm * nm, s0, j, n, n);
+    fu = Batch::At(batch_->fu, nm * m_, s0, j, n, m_);
+  } else {
+    sys.Flow(k, xm, u, f);
+    sys.FlowDerivatives(k, xm, u, fx, fu);
+  }
   if (D == 0) {  // a vanished mode: D f_x = 0 loses the per-unit-time derivatives it needs
     c_.fx_unit.topLeftCorner(n, n) = fx;
     c_.fu_unit.topRows(n) = fu;
@@ -242,12 +304,22 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
     }
     sp.first = false;
   }
-  c_.l = cost.Running(k, xm, u);
   auto lx = c_.lx.head(n);
   auto lxx = c_.lxx.topLeftCorner(n, n);
   auto lux = c_.lux.leftCols(n);
   // lxx: D is applied in SymmetricStage.
-  cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);
+  if (batch_ && batch_->cost) {  // EvaluateBatch's values at this interval's midpoint
+    const int nm = n_max_;
+    c_.l = batch_->l(s0 + j);
+    lx = Batch::At(batch_->lx, nm, s0, j, n, 1);
+    c_.lu = Batch::At(batch_->lu, m_, s0, j, m_, 1);
+    lxx = Batch::At(batch_->lxx, nm * nm, s0, j, n, n);
+    c_.H = Batch::At(batch_->luu, m_ * m_, s0, j, m_, m_);
+    lux = Batch::At(batch_->lux, m_ * nm, s0, j, m_, n);
+  } else {
+    c_.l = cost.Running(k, xm, u);
+    cost.RunningDerivatives(k, xm, u, lx, c_.lu, lxx, c_.H, lux);
+  }
   lux *= D;
   if (D > 0) {
     c_.H *= D;
@@ -267,6 +339,39 @@ void BackwardPass::Evaluate(int k, const Trajectory& nominal, int j, const Matri
   }
   du_prev_ = du_prev;
   du_index_ = index(k, j);
+}
+
+void BackwardPass::EvaluateBatch(const Trajectory& nominal) {
+  // Every interval of every mode, at the midpoint Evaluate would use, in one call per mode
+  // and quantity: a Python system pays one call per mode and Run instead of one per interval
+  // and sweep (the cyclic value sweeps several times over the same coefficients).
+  Batch& b = *batch_;
+  const int nm = n_max_, m = m_;
+  for (int k = 0; k < K_; ++k) {
+    const int n = layout_.dim(k);
+    const int intervals = layout_.count(k) - 1;
+    if (intervals <= 0) continue;
+    const int s0 = index(k, 0);
+    const ModeTrajectory& mode = nominal.modes[k];
+    auto X = Batch::Block(b.x, nm, s0, n, intervals);
+    for (int j = 0; j < intervals; ++j) X.col(j) = 0.5 * (mode.x.col(j) + mode.x.col(j + 1));
+    const auto U = mode.u.leftCols(intervals);
+    if (b.system) {
+      problem_->system->FlowBatch(k, X, U, Batch::Block(b.f, nm, s0, n, intervals));
+      problem_->system->FlowDerivativesBatch(k, X, U,
+                                             Batch::Block(b.fx, nm * nm, s0, n, n * intervals),
+                                             Batch::Block(b.fu, nm * m, s0, n, m * intervals));
+    }
+    if (b.cost) {
+      const SwitchedCost& cost = *problem_->cost;
+      cost.RunningBatch(k, X, U, b.l.segment(s0, intervals));
+      cost.RunningDerivativesBatch(k, X, U, Batch::Block(b.lx, nm, s0, n, intervals),
+                                   Batch::Block(b.lu, m, s0, m, intervals),
+                                   Batch::Block(b.lxx, nm * nm, s0, n, n * intervals),
+                                   Batch::Block(b.luu, m * m, s0, m, m * intervals),
+                                   Batch::Block(b.lux, m * nm, s0, m, n * intervals));
+    }
+  }
 }
 
 bool BackwardPass::FreeSet(int n, const ConstMatrixRef& /*P*/, const ConstVectorRef& p) {
@@ -937,6 +1042,7 @@ bool BackwardPass::Run(const Trajectory& nominal, double regularization, const M
     for (int j = 0; j < layout_.count(k); ++j) tau_(layout_.index(k, j)) = nominal.Tau(k, j);
   }
   k_.setZero();
+  if (batch_) EvaluateBatch(nominal);
   terminal_projected_ = settings_.terminal_event && EventProjection(K_ - 1, nominal);
   const bool cyclic = settings_.cyclic_value > 0 &&
                       settings_.equation == BackwardEquation::kRiccati &&

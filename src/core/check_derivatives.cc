@@ -22,21 +22,28 @@ DerivativeError Compare(const std::string& name, const Matrix& analytic, const M
   return e;
 }
 
+// h_i of CentralDifferenceJacobian at the coordinate x_i.
+double DifferenceStep(double step, double x_i) { return step * std::max(1.0, std::abs(x_i)); }
+
+void CheckStep(const char* where, double step) {
+  if (!(step > 0.0) || !std::isfinite(step)) {
+    throw InvalidArgument(std::string(where) + ": step = " + std::to_string(step) +
+                          ", expected finite and > 0");
+  }
+}
+
 }  // namespace
 
 Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
                                  const ConstVectorRef& x_in, double step) {
-  if (!(step > 0.0) || !std::isfinite(step)) {
-    throw InvalidArgument("CentralDifferenceJacobian: step = " + std::to_string(step) +
-                          ", expected finite and > 0");
-  }
+  CheckStep("CentralDifferenceJacobian", step);
   const Vector x = x_in;
   const Eigen::Index n = x.size();
   if (n == 0) return Matrix(fn(x).size(), 0);
   Matrix J;
   Vector xp = x, xm = x;
   for (Eigen::Index i = 0; i < n; ++i) {
-    const double h = step * std::max(1.0, std::abs(x(i)));
+    const double h = DifferenceStep(step, x(i));
     xp(i) = x(i) + h;
     xm(i) = x(i) - h;
     const Vector fp = fn(xp), fm = fn(xm);
@@ -49,6 +56,41 @@ Matrix CentralDifferenceJacobian(const std::function<Vector(const Vector&)>& fn,
     J.col(i) = (fp - fm) / (2 * h);
     xp(i) = x(i);
     xm(i) = x(i);
+  }
+  return J;
+}
+
+Matrix CentralDifferencePoints(const ConstMatrixRef& Z, double step) {
+  CheckStep("CentralDifferencePoints", step);
+  const Eigen::Index n = Z.rows();
+  Matrix P(n, 2 * n * Z.cols());
+  for (Eigen::Index j = 0; j < Z.cols(); ++j) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double h = DifferenceStep(step, Z(i, j));
+      const Eigen::Index c = 2 * (j * n + i);
+      P.col(c) = Z.col(j);
+      P.col(c + 1) = Z.col(j);
+      P(i, c) = Z(i, j) + h;
+      P(i, c + 1) = Z(i, j) - h;
+    }
+  }
+  return P;
+}
+
+Matrix CentralDifferenceQuotients(const ConstMatrixRef& Z, const ConstMatrixRef& V, double step) {
+  CheckStep("CentralDifferenceQuotients", step);
+  const Eigen::Index n = Z.rows();
+  if (V.cols() != 2 * n * Z.cols()) {
+    throw InvalidArgument("CentralDifferenceQuotients: V has " + std::to_string(V.cols()) +
+                          " columns, expected 2 n N = " + std::to_string(2 * n * Z.cols()));
+  }
+  Matrix J(V.rows(), n * Z.cols());
+  for (Eigen::Index j = 0; j < Z.cols(); ++j) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double h = DifferenceStep(step, Z(i, j));
+      const Eigen::Index c = 2 * (j * n + i);
+      J.col(j * n + i) = (V.col(c) - V.col(c + 1)) / (2 * h);
+    }
   }
   return J;
 }

@@ -45,6 +45,30 @@ void CheckFinite(const char* where, int k, const char* what, const V& v) {
   }
 }
 
+// Throws InvalidArgument "<where>(k=<k>): <what> has a non-finite entry at point j, index i".
+void CheckFinitePoints(const char* where, int k, const char* what, const ConstMatrixRef& X) {
+  if (X.allFinite()) return;
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    for (Eigen::Index i = 0; i < X.rows(); ++i) {
+      if (!std::isfinite(X(i, j))) {
+        std::ostringstream os;
+        os << where << "(k=" << k << "): " << what << " has a non-finite entry at point " << j
+           << ", index " << i << " (" << X(i, j) << ")";
+        throw InvalidArgument(os.str());
+      }
+    }
+  }
+}
+
+// The checks of a batch call on N = X.cols() points: X n x N, U m x N, both finite.
+void CheckPoints(const char* where, int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                 Eigen::Index n, Eigen::Index m) {
+  CheckShape(where, k, "X", X, n, X.cols());
+  CheckShape(where, k, "U", U, m, X.cols());
+  CheckFinitePoints(where, k, "X", X);
+  CheckFinitePoints(where, k, "U", U);
+}
+
 }  // namespace
 
 SwitchedSystem::SwitchedSystem(std::vector<int> state_dims, int input_dim,
@@ -130,6 +154,37 @@ void SwitchedSystem::FlowDerivatives(int k, const ConstVectorRef& x, const Const
   CheckFinite("FlowDerivatives", k, "x", x);
   CheckFinite("FlowDerivatives", k, "u", u);
   DoFlowDerivatives(k, x, u, fx, fu);
+}
+
+void SwitchedSystem::FlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                               MatrixRef F) const {
+  const int n = state_dim(k);
+  CheckPoints("FlowBatch", k, X, U, n, input_dim_);
+  CheckShape("FlowBatch", k, "F", F, n, X.cols());
+  DoFlowBatch(k, X, U, F);
+}
+
+void SwitchedSystem::FlowDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                          MatrixRef FX, MatrixRef FU) const {
+  const int n = state_dim(k);
+  CheckPoints("FlowDerivativesBatch", k, X, U, n, input_dim_);
+  CheckShape("FlowDerivativesBatch", k, "FX", FX, n, n * X.cols());
+  CheckShape("FlowDerivativesBatch", k, "FU", FU, n, input_dim_ * X.cols());
+  DoFlowDerivativesBatch(k, X, U, FX, FU);
+}
+
+void SwitchedSystem::DoFlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                 MatrixRef F) const {
+  for (Eigen::Index j = 0; j < X.cols(); ++j) DoFlow(k, X.col(j), U.col(j), F.col(j));
+}
+
+void SwitchedSystem::DoFlowDerivativesBatch(int k, const ConstMatrixRef& X,
+                                            const ConstMatrixRef& U, MatrixRef FX,
+                                            MatrixRef FU) const {
+  const Eigen::Index n = X.rows(), m = U.rows();
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    DoFlowDerivatives(k, X.col(j), U.col(j), FX.middleCols(j * n, n), FU.middleCols(j * m, m));
+  }
 }
 
 void SwitchedSystem::Reset(int k, const ConstVectorRef& x, VectorRef x_next) const {
@@ -243,6 +298,41 @@ void SwitchedCost::SwitchingDerivatives(int k, const ConstVectorRef& x, VectorRe
   CheckShape("SwitchingDerivatives", k, "phixx", phixx, n, n);
   CheckFinite("SwitchingDerivatives", k, "x", x);
   DoSwitchingDerivatives(k, x, phix, phixx);
+}
+
+void SwitchedCost::RunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                VectorRef l) const {
+  CheckPoints("RunningBatch", k, X, U, X.rows(), U.rows());
+  CheckSize("RunningBatch", k, "l", l, X.cols());
+  DoRunningBatch(k, X, U, l);
+}
+
+void SwitchedCost::RunningDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                           MatrixRef LX, MatrixRef LU, MatrixRef LXX,
+                                           MatrixRef LUU, MatrixRef LUX) const {
+  const Eigen::Index n = X.rows(), m = U.rows(), N = X.cols();
+  CheckPoints("RunningDerivativesBatch", k, X, U, n, m);
+  CheckShape("RunningDerivativesBatch", k, "LX", LX, n, N);
+  CheckShape("RunningDerivativesBatch", k, "LU", LU, m, N);
+  CheckShape("RunningDerivativesBatch", k, "LXX", LXX, n, n * N);
+  CheckShape("RunningDerivativesBatch", k, "LUU", LUU, m, m * N);
+  CheckShape("RunningDerivativesBatch", k, "LUX", LUX, m, n * N);
+  DoRunningDerivativesBatch(k, X, U, LX, LU, LXX, LUU, LUX);
+}
+
+void SwitchedCost::DoRunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                  VectorRef l) const {
+  for (Eigen::Index j = 0; j < X.cols(); ++j) l(j) = DoRunning(k, X.col(j), U.col(j));
+}
+
+void SwitchedCost::DoRunningDerivativesBatch(int k, const ConstMatrixRef& X,
+                                             const ConstMatrixRef& U, MatrixRef LX, MatrixRef LU,
+                                             MatrixRef LXX, MatrixRef LUU, MatrixRef LUX) const {
+  const Eigen::Index n = X.rows(), m = U.rows();
+  for (Eigen::Index j = 0; j < X.cols(); ++j) {
+    DoRunningDerivatives(k, X.col(j), U.col(j), LX.col(j), LU.col(j), LXX.middleCols(j * n, n),
+                         LUU.middleCols(j * m, m), LUX.middleCols(j * n, n));
+  }
 }
 
 }  // namespace ddoc

@@ -275,6 +275,82 @@ TEST(BackwardPass, AdjointGivesTheGradientOfTheSimulatedCost) {
   EXPECT_GT(std::abs(fd_u), 0.05);
 }
 
+// Every output of two passes, bit for bit (keep_P_trajectory on both).
+void ExpectSamePass(const BackwardPass& a, const BackwardPass& b, int K) {
+  auto same = [](const auto& x, const auto& y) {
+    return x.rows() == y.rows() && x.cols() == y.cols() && (x.array() == y.array()).all();
+  };
+  for (int k = 0; k < K; ++k) {
+    ASSERT_EQ(a.num_samples(k), b.num_samples(k));
+    for (int j = 0; j < a.num_samples(k); ++j) {
+      EXPECT_TRUE(same(a.P(k, j), b.P(k, j)) && same(a.p(k, j), b.p(k, j)) &&
+                  same(a.Gain(k, j), b.Gain(k, j)) &&
+                  same(a.Feedforward(k, j), b.Feedforward(k, j)) &&
+                  same(a.Hessian(k, j), b.Hessian(k, j)) &&
+                  same(a.Gradient(k, j), b.Gradient(k, j)) && same(a.Step(k, j), b.Step(k, j)))
+          << "sample (" << k << ", " << j << ")";
+    }
+  }
+  EXPECT_TRUE(same(a.gradient_T(), b.gradient_T()));
+  EXPECT_EQ(a.predicted_linear(), b.predicted_linear());
+  EXPECT_EQ(a.predicted_quadratic(), b.predicted_quadratic());
+  EXPECT_EQ(a.luu_scale(), b.luu_scale());
+  EXPECT_EQ(a.substeps(), b.substeps());
+  EXPECT_EQ(a.sweeps(), b.sweeps());
+}
+
+// A pass (regularization 1e-3) on `nominal` of setup's problem seen through BatchingSystem and
+// BatchingCost.
+struct BatchedPass {
+  BatchingSystem sys;
+  BatchingCost cost;
+  Problem problem;
+  BackwardPass pass;
+  BatchedPass(const NonlinearSetup& setup, bool batch_system, bool batch_cost,
+              const Trajectory& nominal, const BackwardPassSettings& settings)
+      : sys(setup.sys, batch_system), cost(setup.cost, batch_cost),
+        problem(MakeNonlinearProblem(sys, cost)) {
+    pass.Allocate(problem, nominal.total_samples(), settings);
+    EXPECT_TRUE(pass.Run(nominal, 1e-3));
+  }
+};
+
+// A system and a cost that prefer_batch() (their batch calls the C++ default, the per-point
+// loop) give the per-point pass bit for bit, with two batch calls per mode and Run (the flow
+// and its derivatives; the running cost and its derivatives) and no per-point call; either
+// alone likewise.
+TEST(BackwardPass, BatchEvaluationGivesThePerPointPass) {
+  NonlinearSetup setup;
+  Trajectory nominal;
+  SimulatedCost(setup, Eigen::Vector3d(0.50013, 0.40007, 0.60011), 0.0, &nominal);
+  const int intervals = nominal.total_samples() - 3;
+  for (const BackwardEquation equation : {BackwardEquation::kRiccati, BackwardEquation::kLyapunov}) {
+    BackwardPassSettings settings;
+    settings.equation = equation;
+    settings.keep_P_trajectory = true;
+    const BatchedPass reference(setup, false, false, nominal, settings);
+    EXPECT_EQ(reference.sys.batch_calls + reference.cost.batch_calls, 0);
+    EXPECT_GT(reference.sys.point_calls, 0);
+    for (const bool batch_system : {true, false}) {
+      for (const bool batch_cost : {true, false}) {
+        if (!batch_system && !batch_cost) continue;
+        const BatchedPass batched(setup, batch_system, batch_cost, nominal, settings);
+        const BatchingSystem& sys = batched.sys;
+        const BatchingCost& cost = batched.cost;
+        SCOPED_TRACE(::testing::Message() << "equation " << static_cast<int>(equation)
+                                        << " system " << batch_system << " cost " << batch_cost);
+        ExpectSamePass(reference.pass, batched.pass, 3);
+        EXPECT_EQ(sys.batch_calls, batch_system ? 6 : 0);
+        EXPECT_EQ(sys.batch_points, batch_system ? 2 * intervals : 0);
+        EXPECT_EQ(cost.batch_calls, batch_cost ? 6 : 0);
+        EXPECT_EQ(cost.batch_points, batch_cost ? 2 * intervals : 0);
+        if (batch_system) EXPECT_EQ(sys.point_calls, 0);  // (the surface is no flow call)
+        if (batch_cost) EXPECT_EQ(cost.point_calls, 0);
+      }
+    }
+  }
+}
+
 // NonlinearSystem's dynamics and resets, but only the LAST mode ends at a state event, its
 // surface h_2 = 0.16 - x0 - 0.5 x2 - 2 x1^2, which it also reports as its guard: on ModelPlant
 // modes 0 and 1 are time-based and mode 2 ends where h_2 crosses zero (after about 2 s).
@@ -814,6 +890,38 @@ TEST(BackwardPass, CyclicValueRunDoesNotAllocateAndRejectsBadWeights) {
     BackwardPass b;
     EXPECT_THROW(b.Allocate(lq.problem, 100, settings), InvalidArgument) << bad;
   }
+}
+
+// With the cyclic value the pass sweeps the same intervals several times: a batch system and
+// cost are evaluated once per Run (two calls each for the one mode), not once per sweep, give
+// the per-point fixed point bit for bit, and a Run allocates nothing (the C++ batch default).
+TEST(BackwardPass, BatchEvaluationIsOncePerRunNotPerSweep) {
+  CyclicLq lq;
+  BackwardPassSettings settings = CyclicLq::Settings(1.0);
+  settings.keep_P_trajectory = true;
+  BackwardPass reference;
+  lq.RunPass(&reference, settings);
+  ASSERT_GT(reference.sweeps(), 5);
+  BatchingSystem sys(lq.sys);
+  BatchingCost cost(lq.cost);
+  Problem problem = lq.problem;
+  problem.system = &sys;
+  problem.cost = &cost;
+  BackwardPass pass;
+  pass.Allocate(problem, 100, settings);
+  ASSERT_TRUE(pass.Run(lq.traj));
+  ExpectSamePass(reference, pass, 1);
+  EXPECT_EQ(sys.batch_calls, 2);
+  EXPECT_EQ(cost.batch_calls, 2);
+  EXPECT_EQ(sys.batch_points, 2 * 60);
+  EXPECT_EQ(sys.point_calls + cost.point_calls, 0);
+  pass.ResetCyclicValue();
+  {
+    MallocCounter counter;
+    pass.Run(lq.traj);
+    EXPECT_EQ(counter.count(), 0);
+  }
+  EXPECT_EQ(sys.batch_calls, 4);
 }
 
 TEST(BackwardPass, ACyclicValueCanBeSeeded) {

@@ -77,6 +77,32 @@ TEST(EvaluateCost, ZeroOrderHoldQuadratureIsSecondOrder) {
   }
 }
 
+// A cost that prefers_batch() is evaluated by one RunningBatch call per mode (both ends of
+// every interval), with the per-point loop's sum: the same bits.
+TEST(EvaluateCost, ABatchCostIsOneCallPerModeWithThePerPointResult) {
+  NonlinearSystem sys;
+  NonlinearCost inner;
+  BatchingCost per_point(inner, false), batched(inner, true);
+  const Problem a = MakeNonlinearProblem(sys, per_point), b = MakeNonlinearProblem(sys, batched);
+  ModelPlant plant(a);
+  FunctionPolicy policy(Eigen::Vector3d(0.4, 0.3, 0.5),
+                        [](int k, double tau, const ConstVectorRef&, VectorRef u) {
+                          u(0) = std::sin(3.0 * tau) + 0.1 * k;
+                          u(1) = 0.5 - tau;
+                        });
+  Trajectory traj;
+  plant.Run(Eigen::Vector3d(0.2, -0.1, 0.3), policy, &traj);
+  const CostBreakdown expected = EvaluateCost(a, traj), got = EvaluateCost(b, traj);
+  EXPECT_EQ(got.total, expected.total);
+  EXPECT_TRUE(got.running == expected.running) << got.running.transpose();
+  EXPECT_TRUE(got.switching == expected.switching);
+  EXPECT_EQ(batched.point_calls, 0);
+  EXPECT_EQ(batched.batch_calls, 3);
+  EXPECT_EQ(batched.batch_points, 2 * (traj.total_samples() - 3));
+  EXPECT_EQ(per_point.batch_calls, 0);
+  EXPECT_EQ(per_point.point_calls, 2 * (traj.total_samples() - 3));
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

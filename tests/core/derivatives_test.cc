@@ -215,6 +215,37 @@ TEST(Derivatives, CentralDifferenceJacobianKnownAnswers) {
   EXPECT_THROW(RelativeError(Matrix::Zero(2, 2), Matrix::Zero(2, 3)), InvalidArgument);
 }
 
+TEST(Derivatives, CentralDifferencePointsGiveCentralDifferenceJacobianBitwise) {
+  // The batched central differences (all the perturbed points of N points, then the quotients)
+  // are CentralDifferenceJacobian's arithmetic: equal bits, point by point.
+  const auto fn = [](const Vector& z) {
+    Vector f(2);
+    f << std::sin(z(0)) * z(1) + z(2) * z(2), std::exp(0.3 * z(1)) - z(0) * z(2);
+    return f;
+  };
+  Matrix Z(3, 4);
+  Z << 0.3, -2.5, 1e3, 0.0,  //
+      1.7, 0.2, -0.4, 1e-9,  //
+      -0.9, 4.0, 0.5, -3e2;
+  for (double step : {1e-6, 1e-4}) {
+    const Matrix P = CentralDifferencePoints(Z, step);
+    ASSERT_EQ(P.rows(), 3);
+    ASSERT_EQ(P.cols(), 2 * 3 * 4);
+    Matrix V(2, P.cols());
+    for (Eigen::Index c = 0; c < P.cols(); ++c) V.col(c) = fn(P.col(c));
+    const Matrix J = CentralDifferenceQuotients(Z, V, step);
+    ASSERT_EQ(J.rows(), 2);
+    ASSERT_EQ(J.cols(), 3 * 4);
+    for (Eigen::Index j = 0; j < Z.cols(); ++j) {
+      const Matrix expected = CentralDifferenceJacobian(fn, Z.col(j), step);
+      EXPECT_TRUE((J.middleCols(j * 3, 3).array() == expected.array()).all())
+          << "point " << j << ":\n" << J.middleCols(j * 3, 3) << "\nvs\n" << expected;
+    }
+  }
+  EXPECT_THROW(CentralDifferencePoints(Z, 0.0), InvalidArgument);
+  EXPECT_THROW(CentralDifferenceQuotients(Z, Matrix::Zero(2, 5), 1e-6), InvalidArgument);
+}
+
 TEST(Derivatives, TimeNormalizationRejectsWrongSizes) {
   NonlinearSystem sys;
   NonlinearCost cost;

@@ -178,6 +178,132 @@ class NonlinearCost : public AutoDiffCost<NonlinearCost> {
   }
 };
 
+/// The engine's calls of a BatchingSystem or BatchingCost: per point (outside a batch) and
+/// batches, with the batches' points.
+struct CallCounter {
+  mutable int point_calls = 0;   ///< per-point calls outside a batch
+  mutable int batch_calls = 0;   ///< batch calls
+  mutable int batch_points = 0;  ///< points of those calls
+
+ protected:
+  void Point() const { point_calls += in_batch_ ? 0 : 1; }
+  // Counts a batch of `points` around `evaluate` (the default per-point loop).
+  template <class F>
+  void Batch(Eigen::Index points, F&& evaluate) const {
+    ++batch_calls;
+    batch_points += static_cast<int>(points);
+    in_batch_ = true;
+    evaluate();
+    in_batch_ = false;
+  }
+
+ private:
+  mutable bool in_batch_ = false;
+};
+
+/// `inner` seen through the batch interface: with batch = true it prefers_batch(), so the
+/// engine evaluates it by FlowBatch / FlowDerivativesBatch, whose default per-point loop gives
+/// inner's values. Counts the engine's calls: per point (outside a batch) and batches.
+class BatchingSystem : public SwitchedSystem, public CallCounter {
+ public:
+  explicit BatchingSystem(const SwitchedSystem& inner, bool batch = true)
+      : SwitchedSystem(Dims(inner), inner.input_dim(), SurfaceDims(inner),
+                       inner.has_cycle_reset()),
+        inner_(inner), batch_(batch) {}
+  bool prefers_batch() const override { return batch_; }
+
+ protected:
+  static std::vector<int> Dims(const SwitchedSystem& s) {
+    std::vector<int> n;
+    for (int k = 0; k < s.num_modes(); ++k) n.push_back(s.state_dim(k));
+    return n;
+  }
+  static std::vector<int> SurfaceDims(const SwitchedSystem& s) {
+    std::vector<int> d;
+    for (int k = 0; k < s.num_modes(); ++k) d.push_back(s.surface_dim(k));
+    return d;
+  }
+  void DoFlow(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+              VectorRef xdot) const override {
+    Point();
+    inner_.Flow(k, x, u, xdot);
+  }
+  void DoFlowDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, MatrixRef fx,
+                         MatrixRef fu) const override {
+    Point();
+    inner_.FlowDerivatives(k, x, u, fx, fu);
+  }
+  void DoFlowBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                   MatrixRef F) const override {
+    Batch(X.cols(), [&] { SwitchedSystem::DoFlowBatch(k, X, U, F); });
+  }
+  void DoFlowDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                              MatrixRef FX, MatrixRef FU) const override {
+    Batch(X.cols(), [&] { SwitchedSystem::DoFlowDerivativesBatch(k, X, U, FX, FU); });
+  }
+  void DoReset(int k, const ConstVectorRef& x, VectorRef x_next) const override {
+    inner_.Reset(k, x, x_next);
+  }
+  void DoResetDerivative(int k, const ConstVectorRef& x, MatrixRef gx) const override {
+    inner_.ResetDerivative(k, x, gx);
+  }
+  void DoSurface(int k, const ConstVectorRef& x, VectorRef h) const override {
+    inner_.Surface(k, x, h);
+  }
+  void DoSurfaceDerivative(int k, const ConstVectorRef& x, MatrixRef hx) const override {
+    inner_.SurfaceDerivative(k, x, hx);
+  }
+  bool DoGuardGradient(int k, const ConstVectorRef& x, const ConstVectorRef& u,
+                       VectorRef hx) const override {
+    return inner_.GuardGradient(k, x, u, hx);
+  }
+
+ private:
+  const SwitchedSystem& inner_;
+  bool batch_;
+};
+
+/// `inner` seen through the batch interface, as BatchingSystem (RunningBatch /
+/// RunningDerivativesBatch with the default per-point loop); counts the calls.
+class BatchingCost : public SwitchedCost, public CallCounter {
+ public:
+  explicit BatchingCost(const SwitchedCost& inner, bool batch = true)
+      : inner_(inner), batch_(batch) {}
+  bool prefers_batch() const override { return batch_; }
+
+ protected:
+  double DoRunning(int k, const ConstVectorRef& x, const ConstVectorRef& u) const override {
+    Point();
+    return inner_.Running(k, x, u);
+  }
+  void DoRunningDerivatives(int k, const ConstVectorRef& x, const ConstVectorRef& u, VectorRef lx,
+                            VectorRef lu, MatrixRef lxx, MatrixRef luu,
+                            MatrixRef lux) const override {
+    Point();
+    inner_.RunningDerivatives(k, x, u, lx, lu, lxx, luu, lux);
+  }
+  double DoSwitching(int k, const ConstVectorRef& x) const override {
+    return inner_.Switching(k, x);
+  }
+  void DoSwitchingDerivatives(int k, const ConstVectorRef& x, VectorRef phix,
+                              MatrixRef phixx) const override {
+    inner_.SwitchingDerivatives(k, x, phix, phixx);
+  }
+  void DoRunningBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                      VectorRef l) const override {
+    Batch(X.cols(), [&] { SwitchedCost::DoRunningBatch(k, X, U, l); });
+  }
+  void DoRunningDerivativesBatch(int k, const ConstMatrixRef& X, const ConstMatrixRef& U,
+                                 MatrixRef LX, MatrixRef LU, MatrixRef LXX, MatrixRef LUU,
+                                 MatrixRef LUX) const override {
+    Batch(X.cols(), [&] { SwitchedCost::DoRunningDerivativesBatch(k, X, U, LX, LU, LXX, LUU, LUX); });
+  }
+
+ private:
+  const SwitchedCost& inner_;
+  bool batch_;
+};
+
 /// A problem over `sys` and `cost` with the box |u_i| <= u_bound on every input, every mode's
 /// duration in [d_min, d_max] and no surface penalties. The system and cost must outlive it.
 inline Problem BoxProblem(const SwitchedSystem& sys, const SwitchedCost& cost, double u_bound,

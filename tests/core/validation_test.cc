@@ -4,6 +4,8 @@
 // bounds, non-finite inputs. Each message must name the offending quantity.
 #include <cmath>
 #include <limits>
+#include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -119,6 +121,61 @@ TEST(Validation, SwitchedSystemCallsCheckSizesAndFiniteness) {
   ExpectError([&] { b.cost.RunningDerivatives(0, x, u, lx, lu, lxx, luu, lux); },
               "lux is 1x3, expected 1x2");
   ExpectError([&] { b.cost.Running(0, bad, u); }, "non-finite");
+}
+
+// The batch interface of a C++ system and cost: by default the per-point evaluations, bit for
+// bit, at every point of a batch; wrong shapes and non-finite points are named.
+TEST(Validation, BatchDefaultsAreThePerPointEvaluations) {
+  NonlinearSystem sys;
+  NonlinearCost cost;
+  EXPECT_FALSE(sys.prefers_batch());
+  EXPECT_FALSE(cost.prefers_batch());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> draw(-1.5, 1.5);
+  const int N = 5, m = sys.input_dim();
+  for (int k = 0; k < sys.num_modes(); ++k) {
+    const int n = sys.state_dim(k);
+    const Matrix X = Matrix::NullaryExpr(n, N, [&]() { return draw(rng); });
+    const Matrix U = Matrix::NullaryExpr(m, N, [&]() { return draw(rng); });
+    Matrix F(n, N), FX(n, n * N), FU(n, m * N), LX(n, N), LU(m, N), LXX(n, n * N),
+        LUU(m, m * N), LUX(m, n * N);
+    Vector l(N);
+    sys.FlowBatch(k, X, U, F);
+    sys.FlowDerivativesBatch(k, X, U, FX, FU);
+    cost.RunningBatch(k, X, U, l);
+    cost.RunningDerivativesBatch(k, X, U, LX, LU, LXX, LUU, LUX);
+    for (int j = 0; j < N; ++j) {
+      Vector f(n), lx(n), lu(m);
+      Matrix fx(n, n), fu(n, m), lxx(n, n), luu(m, m), lux(m, n);
+      sys.Flow(k, X.col(j), U.col(j), f);
+      sys.FlowDerivatives(k, X.col(j), U.col(j), fx, fu);
+      cost.RunningDerivatives(k, X.col(j), U.col(j), lx, lu, lxx, luu, lux);
+      EXPECT_TRUE(F.col(j) == f) << "k " << k << " j " << j;
+      EXPECT_TRUE(FX.middleCols(j * n, n) == fx) << "k " << k << " j " << j;
+      EXPECT_TRUE(FU.middleCols(j * m, m) == fu) << "k " << k << " j " << j;
+      EXPECT_EQ(l(j), cost.Running(k, X.col(j), U.col(j))) << "k " << k << " j " << j;
+      EXPECT_TRUE(LX.col(j) == lx && LU.col(j) == lu) << "k " << k << " j " << j;
+      EXPECT_TRUE(LXX.middleCols(j * n, n) == lxx) << "k " << k << " j " << j;
+      EXPECT_TRUE(LUU.middleCols(j * m, m) == luu) << "k " << k << " j " << j;
+      EXPECT_TRUE(LUX.middleCols(j * n, n) == lux) << "k " << k << " j " << j;
+    }
+    // Wrong shapes and a non-finite point are named.
+    Matrix F_bad(n, N + 1), FX_bad(n, n * N - 1);
+    ExpectError([&] { sys.FlowBatch(k, X, U, F_bad); },
+                "FlowBatch(k=" + std::to_string(k) + "): F is " + std::to_string(n) + "x" +
+                    std::to_string(N + 1) + ", expected " + std::to_string(n) + "x" +
+                    std::to_string(N));
+    ExpectError([&] { sys.FlowDerivativesBatch(k, X, U, FX_bad, FU); }, "FX is");
+    ExpectError([&] { sys.FlowBatch(k, X, U.leftCols(N - 1), F); }, "U is");
+    ExpectError([&] { sys.FlowBatch(k, X.topRows(n - 1), U, F); }, "X is");
+    Vector l_bad(N + 2);
+    ExpectError([&] { cost.RunningBatch(k, X, U, l_bad); }, "l has size");
+    Matrix X_nan = X;
+    X_nan(n - 1, 3) = kNaN;
+    ExpectError([&] { sys.FlowBatch(k, X_nan, U, F); },
+                "X has a non-finite entry at point 3, index " + std::to_string(n - 1));
+    ExpectError([&] { cost.RunningBatch(k, X_nan, U, l); }, "at point 3");
+  }
 }
 
 TEST(Validation, ProblemNamesEachProblem) {

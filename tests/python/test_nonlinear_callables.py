@@ -19,25 +19,13 @@ import numpy as np
 
 import ddoc
 import ddoc_testing
-from standard_pose import exp1_flow, suite_bounds
+from standard_pose import exp1_python_cost, exp1_system, suite_bounds
 
 
 def test_exp1_from_python_callables_matches_cpp_twin():
     d = ddoc_testing.data("exp1")
-    target = np.asarray(d["target"])
-
-    def running(k, x, u):
-        e = x - target
-        return 0.5 * float(e @ e) + 0.5 * float(u[0] * u[0])
-
-    def switching(k, x):
-        if k < 2:
-            return 0.0
-        e = x - target
-        return 0.5 * float(e @ e)
-
-    system = ddoc.CallbackSystem([2, 2, 2], 1, exp1_flow)
-    cost = ddoc.CallbackCost(running, switching)
+    system = exp1_system("values")
+    cost = exp1_python_cost(d, "values")
     problem = ddoc.Problem(system, cost, suite_bounds(3, [-np.inf], [np.inf], d["final_time"]))
     r = ddoc.Learner(problem).solve(d["x0"], d["initial_durations"])
     ref = ddoc_testing.solve("exp1", "default")

@@ -113,6 +113,27 @@ def test_ctrl_c_keeps_partial_result():
     assert partial.cost <= partial.cost_history[0]
 
 
+def test_ctrl_c_during_a_python_model_keeps_partial_result():
+    """SIGINT while a CallbackSystem's model is simulated (the GIL held for the run, issue 46):
+    the KeyboardInterrupt raised in a flow call ends the solve as SolveInterrupted."""
+    import ddoc_testing
+    from standard_pose import exp1_python_cost, exp1_system, suite_bounds
+    d = ddoc_testing.data("exp1")
+    problem = ddoc.Problem(exp1_system("batch"), exp1_python_cost(d, "batch"),
+                           suite_bounds(3, [-np.inf], [np.inf], d["final_time"]))
+    settings = ddoc.LearnerSettings()
+    settings.alpha_initial = 1e-4  # tiny steps: hundreds of trials of ~10 ms
+    settings.max_trials = 100000
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(ddoc.SolveInterrupted) as info:
+            ddoc.Learner(problem, settings).solve(d["x0"], d["initial_durations"])
+    finally:
+        timer.cancel()
+    assert info.value.result.interrupted and 0 < info.value.result.trials < settings.max_trials
+
+
 def test_keyboard_interrupt_from_a_callback_keeps_partial_result():
     """A KeyboardInterrupt raised in Python during the solve (here: the progress callback)."""
     problem, _ = two_mode_problem()

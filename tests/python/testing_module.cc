@@ -7,6 +7,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <chrono>
 #include <limits>
 #include <string>
 
@@ -91,6 +93,57 @@ py::dict SolveDirect(const std::string& name, const std::string& preset) {
   return out;
 }
 
+// Seconds per call of system.Flow(k, x, u) (points = 0) or of system.FlowBatch at `points`
+// copies of (x, u), over `calls` calls with the GIL released, as in a solve's trial (a Python
+// system's callables re-acquire it): the cost of one C++ -> Python call (tools/bench/python).
+double TimeFlow(const py::object& system_in, int k, const Vector& x, const Vector& u, int calls,
+                int points, bool release_gil) {
+  // A ddoc.System, or the name of a standard problem: its C++ system.
+  std::unique_ptr<StandardProblem> sp;
+  if (py::isinstance<py::str>(system_in)) sp = MakeStandardProblem(system_in.cast<std::string>());
+  const SwitchedSystem& system = sp ? *sp->problem.system : system_in.cast<const SwitchedSystem&>();
+  std::unique_ptr<py::gil_scoped_release> release;
+  if (release_gil) release = std::make_unique<py::gil_scoped_release>();
+  Vector xdot(x.size());
+  const Matrix X = x.replicate(1, std::max(points, 1)), U = u.replicate(1, std::max(points, 1));
+  Matrix F(x.size(), X.cols());
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < calls; ++i) {
+    if (points == 0) {
+      system.Flow(k, x, u, xdot);
+    } else {
+      system.FlowBatch(k, X, U, F);
+    }
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / calls;
+}
+
+// One ModelPlant run (the solve's simulation, dt = 1e-3 s) of `system` (None: the C++ twin's)
+// with the standard problem `name`'s initial policy, the GIL released: {"seconds", "steps"}
+// (median of repeats).
+py::dict TimeSimulation(const py::object& system, const std::string& name, int repeats) {
+  const auto sp = MakeStandardProblem(name);
+  ModelPlant plant(system.is_none() ? *sp->problem.system : system.cast<const SwitchedSystem&>(),
+                   sp->problem.bounds);
+  FunctionPolicy policy = sp->InitialPolicy();
+  std::vector<double> times;
+  Trajectory out;
+  {
+    py::gil_scoped_release release;
+    for (int r = 0; r < repeats; ++r) {
+      const auto start = std::chrono::steady_clock::now();
+      plant.Run(sp->x0, policy, &out);
+      times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+                          .count());
+    }
+  }
+  std::sort(times.begin(), times.end());
+  py::dict d;
+  d["seconds"] = times[times.size() / 2];
+  d["steps"] = out.total_samples() - out.num_modes();  // each mode's last sample is no step
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(ddoc_testing, mod) {
@@ -98,4 +151,8 @@ PYBIND11_MODULE(ddoc_testing, mod) {
   mod.def("names", &StandardProblemNames);
   mod.def("data", &Data, py::arg("name"));
   mod.def("solve", &SolveDirect, py::arg("name"), py::arg("preset") = "default");
+  mod.def("time_flow", &TimeFlow, py::arg("system"), py::arg("k"), py::arg("x"), py::arg("u"),
+          py::arg("calls"), py::arg("points") = 0, py::arg("release_gil") = true);
+  mod.def("time_simulation", &TimeSimulation, py::arg("system"), py::arg("name"),
+          py::arg("repeats") = 3);
 }
