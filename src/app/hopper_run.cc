@@ -33,12 +33,20 @@ int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char*
 }
 
 std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
-                       double phase_time) {
+                       double phase_time, double floor_slope) {
   char buf[160];
   if (!x.allFinite()) return "the measured state is not finite";
-  if (x(hopper::kY) < lim.min_height) {
+  if (floor_slope == 0.0 && x(hopper::kY) < lim.min_height) {
     std::snprintf(buf, sizeof(buf), "body height %.3f m below %.2f m", x(hopper::kY),
                   lim.min_height);
+    return buf;
+  }
+  // On a sloped floor (the foot-centre line y = x tan(slope) through the origin) the height is
+  // the COM's above the floor under it: a robot hopping down hill has not fallen.
+  const double above_floor = x(hopper::kY) - x(hopper::kX) * std::tan(floor_slope);
+  if (floor_slope != 0.0 && above_floor < lim.min_height) {
+    std::snprintf(buf, sizeof(buf), "body height %.3f m above the floor below %.2f m",
+                  above_floor, lim.min_height);
     return buf;
   }
   if (std::abs(x(hopper::kPhi)) > lim.max_pitch) {
@@ -420,7 +428,8 @@ StepOutcome RunStepper::Step() {
     mode_ = c.mode();
     phase_start_ = d->time;
   }
-  const std::string fall = FallReason(limits_, x_, d->time - phase_start_);
+  const std::string fall =
+      FallReason(limits_, x_, d->time - phase_start_, c.mapping().floor_slope);
   if (!fall.empty()) return {StepOutcome::Kind::kFell, fall};
   return {};
 }
