@@ -75,7 +75,6 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
                            ModelPlant* plant, HopperCost* cost, OnlineController* law,
                            NominalGait* gait) {
   InitialLaw out;
-  *gait = FindNominalGait(config.model, config.gait);
   std::string key, unusable;  // unusable: " (<file>: <why>)" when a stored law was not usable
   if (!config.law_cache.empty()) {
     key = InitialLawKey(config);
@@ -91,6 +90,9 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
     bool loaded = ReadInitialLaw(config.law_cache, key, &stored, &why);
     if (loaded) {
       try {
+        // The gait the solve started from, rebuilt from its search variables (the key holds
+        // every input of the search).
+        *gait = NominalGaitAt(config.model, config.gait, stored.gait_search);
         law->Allocate(problem, config.model_learner.max_samples, config.model_learner.controller);
         law->ImportLaw(stored.law);
       } catch (const InvalidArgument& e) {
@@ -110,6 +112,7 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
       out.trouble = true;
     }
   }
+  *gait = FindNominalGait(config.model, config.gait);
   Learner model_learner(problem, config.model_learner);
   const SolveResult solved = SolveFromGait(model_learner, *plant, cost, *gait);
   out.cost = solved.cost;
@@ -123,6 +126,7 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
   stored.law = law->ExportLaw();
   stored.model_cost = out.cost;
   stored.model_iterations = out.iterations;
+  stored.gait_search = gait->search;
   std::string why;
   if (WriteInitialLaw(config.law_cache, key, stored, &why)) {
     out.status = "stored " + InitialLawPath(config.law_cache, key) + unusable;

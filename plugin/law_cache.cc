@@ -24,7 +24,7 @@ namespace ddoc::plugin {
 namespace {
 
 constexpr char kMagic[8] = {'D', 'D', 'O', 'C', 'L', 'A', 'W', '\n'};
-constexpr std::uint32_t kFormat = 1;
+constexpr std::uint32_t kFormat = 2;  // 2: the gait search variables after the iterations
 
 // A field added to one of these structs must be added to InitialLawKey below (or stated there as
 // not read by the model solve); the sizes are those of x86-64 with libstdc++.
@@ -225,6 +225,7 @@ std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& 
   out += key;
   Put(&out, s.model_cost);
   Put(&out, static_cast<std::int32_t>(s.model_iterations));
+  PutArray(&out, s.gait_search.data(), s.gait_search.size());
   Put(&out, l.alpha);
   Put(&out, l.feedback_factor);
   const auto K = static_cast<std::int32_t>(l.samples.size());
@@ -267,7 +268,8 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   }
   std::int32_t iterations = 0, K = 0, n_max = 0, m = 0;
   OnlineControllerLaw& l = s->law;
-  if (!r.Get(&s->model_cost) || !r.Get(&iterations) || !r.Get(&l.alpha) ||
+  if (!r.Get(&s->model_cost) || !r.Get(&iterations) ||
+      !r.Array(s->gait_search.data(), s->gait_search.size()) || !r.Get(&l.alpha) ||
       !r.Get(&l.feedback_factor) || !r.Get(&K) || K < 1 || K > 64) {
     return fail("bad header");
   }
@@ -306,6 +308,7 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   }
   if (!r.done()) return fail("trailing bytes");
   if (!std::isfinite(s->model_cost)) return fail("non-finite model cost");
+  if (!s->gait_search.allFinite()) return fail("non-finite gait search variables");
   return true;
 }
 

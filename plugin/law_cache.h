@@ -22,6 +22,9 @@ struct StoredInitialLaw {
   OnlineControllerLaw law;   ///< u^0 = Learner::ConvergedPolicy(ocfb_alpha) of the model solve
   double model_cost = 0.0;   ///< converged OC-FB cost on the model
   int model_iterations = 0;  ///< trials of the model solve
+  /// NominalGait::search of the gait the solve started from: NominalGaitAt rebuilds the gait
+  /// without its search (a load then takes milliseconds, not the search's 0.1 s).
+  Eigen::Matrix<double, 6, 1> gait_search = Eigen::Matrix<double, 6, 1>::Zero();
 };
 
 /// The text that identifies u^0: every ControllerConfig field the model solve reads (doubles as
@@ -39,7 +42,7 @@ bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitia
                     std::string* why);
 
 /// The bytes of a law file stored for `key` (what WriteInitialLaw writes): a header, the key, the
-/// model cost and trials, the law's arrays, then LawFileChecksum of everything before it.
+/// model cost and trials, the gait's search variables, the law's arrays, then LawFileChecksum of everything before it.
 std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& law);
 
 /// Parses the bytes of a law file stored for `key`. False with *why when they are not one
