@@ -52,7 +52,15 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(id.resolve_latency >= 0.0) || !std::isfinite(id.resolve_latency)) {
     fail("identification.resolve_latency", id.resolve_latency, "finite and >= 0");
   }
+  const TermsIdentification::Resolution& res = id.term_resolution;
+  for (const auto& [name, value] : {std::pair{"b_leg", res.b_leg}, {"b_hip", res.b_hip},
+                                    {"inertia", res.inertia}, {"slope", res.slope}}) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      fail(std::string("identification.term_resolution.") + name, value, "finite and > 0");
+    }
+  }
   MassIdentification check(id.estimator);  // throws naming a bad estimator setting
+  TermsIdentification check_terms(id.terms_estimator);
 }
 
 ModelPlantSettings ModelPlantSettingsFor(const ControllerConfig& c) {
@@ -185,6 +193,7 @@ void HopperController::Initialize() {
     return model_.Guard(k, x, u);
   });
   mass_id_ = MassIdentification(config_.identification.estimator);
+  terms_id_ = TermsIdentification(config_.identification.terms_estimator);
   // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
   const InitialLaw u0 =
       SolveInitialLaw(config_, problem_, &model_plant_, &cost_, &fallback_, &gait_);
@@ -215,11 +224,11 @@ void HopperController::MakeDriver(int warmup) {
       HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
 }
 
-void HopperController::ResolveModel(double mass) {
+void HopperController::ResolveModel(const HopperParams& params) {
   const auto start = std::chrono::steady_clock::now();
   // Objects of its own: the simulation side keeps using model_ and fallback_ meanwhile.
   ControllerConfig config = config_;
-  config.model.M = mass;
+  config.model = params;
   HopperModel model(config.model);
   HopperCost cost(model, config.cost_weights);
   const Problem problem = HopperProblem(model, cost, config.durations);
@@ -240,7 +249,12 @@ void HopperController::ResolveModel(double mass) {
   staged_.ready = true;
   staged_.record = ModelResolve();
   staged_.record.hop = job_hop_;
-  staged_.record.mass = mass;
+  staged_.record.mass = params.M;
+  staged_.record.b_leg = params.b_leg;
+  staged_.record.b_hip = params.b_hip;
+  staged_.record.slope = params.slope;
+  staged_.record.j_body = params.J_body;
+  staged_.record.j_leg = params.J_leg;
   staged_.record.law_cache = u0.status;
   staged_.record.wall_ms =
       1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -281,7 +295,7 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
   robot_data_ = d;
   // What identification learned stays (the same robot): a staged u^0 takes over now.
   if (staged_.ready) TakeOverResolvedModel();
-  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
+  resolve_request_.reset();
   driver_->Reset();
   waiting_.clear();
   reports_.clear();
@@ -364,6 +378,7 @@ void HopperController::Step(const mjData* d) {
   // The stiffness commands of the previous step were held over [last_time_, t].
   if (started_) vsa_.Advance(t - last_time_, u_(2), u_(3));
   const double step = started_ ? t - last_time_ : 0.0;
+  const double t_prev = last_time_;
   last_time_ = t;
 
   // Phase (ContactPhaseDetector), then the state, mapped once in the coordinates this step needs:
@@ -377,6 +392,9 @@ void HopperController::Step(const mjData* d) {
   }
   if (!flight) MapStanceState(map_, d, vsa_.state(), xs_.data());
   if (was_stance) AddStanceImpulse(d, step);
+  if (started_) AddBalances(d, was_stance, t_prev, step);
+  prev_phid_ = flight ? xf_(hopper::kPhid) : xs_(hopper::kSPhid);
+  prev_body_v_ << d->qvel[map_.dof_x], d->qvel[map_.dof_z];
   if (!started_) {
     started_ = true;
     BeginHop(t, xf_);
@@ -465,6 +483,26 @@ void HopperController::AddStanceImpulse(const mjData* d, double h) {
   stance_impulse_ += (f_leg * std::cos(theta) + tangential * std::sin(theta)) * h;
 }
 
+void HopperController::AddBalances(const mjData* d, bool was_stance, double t_prev, double h) {
+  const bool flight = mode() == hopper::kFlight;
+  // The pitch balance: the damper acts on the step's end rate (MuJoCo's implicit damping).
+  const double phid = flight ? xf_(hopper::kPhid) : xs_(hopper::kSPhid);
+  const double thetad = flight ? xf_(hopper::kThetad) : xs_(hopper::kSThetad);
+  balances_.hip.Add(Eigen::Vector2d(phid - prev_phid_, (phid - thetad) * h),
+                    d->ctrl[map_.act_hip] * h);
+  // The radial balance over a step with both ends in stance, after the impact step.
+  if (flight || !was_stance || !(t_prev > touchdown_step_)) return;
+  const double theta = last_stance_(hopper::kSTheta);
+  const double rd0 = last_stance_(hopper::kSRd), rd1 = xs_(hopper::kSRd), wr = 0.5 * (rd0 + rd1);
+  const double g = -robot_model_->opt.gravity[2];
+  // The body's velocity change along the leg (foot to hip), (-sin theta, cos theta).
+  const double dv = (d->qvel[map_.dof_x] - prev_body_v_(0)) * -std::sin(theta) +
+                    (d->qvel[map_.dof_z] - prev_body_v_(1)) * std::cos(theta);
+  balances_.leg_work += d->ctrl[map_.act_leg] * wr * h;
+  balances_.leg_motion += (dv + g * std::cos(theta) * h) * wr;
+  balances_.leg_rate_sq += rd1 * wr * h;
+}
+
 void HopperController::Record(double t) {
   TrajectoryRecorder& rec = recorders_[recording_];
   const bool flight = mode() == hopper::kFlight;
@@ -503,6 +541,10 @@ void HopperController::BeginHop(double t, const FlightState14& x) {
   stance_pending_ = false;
   effort_ = 0.0;
   stance_impulse_ = 0.0;
+  balances_ = HopIdentificationData();
+  balances_.start_foot_x = HopperModel::FootX(x);
+  balances_.start_foot_y = HopperModel::FootHeight(x);
+  balances_.leg_work = balances_.leg_motion = balances_.leg_rate_sq = 0.0;
 }
 
 void HopperController::Touchdown(double t, const FlightState14& x) {
@@ -546,6 +588,13 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   const double stance_time = t - r.t_touchdown;
   const double dyd =
       r.body_takeoff(3) - r.body_touchdown(3) - robot_model_->opt.gravity[2] * stance_time;
+  r.identification = balances_;
+  r.identification.end_foot_x = HopperModel::FootX(x);
+  r.identification.end_foot_y = HopperModel::FootHeight(x);
+  if (!(balances_.leg_rate_sq > 0.0)) {  // no step after the impact: no radial balance
+    r.identification.leg_work = r.identification.leg_motion = r.identification.leg_rate_sq =
+        HopIdentificationData::kNaN;
+  }
   if (stance_time > 0 && dyd > 0) {
     r.stance_mass = stance_impulse_ / dyd;
     r.identification.stance_impulse = stance_impulse_;
@@ -553,12 +602,17 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   }
   mass_id_.Add(r.identification);
   const MassIdentification::Estimate estimate = mass_id_.estimate();
+  terms_id_.Add(r.identification, estimate.mass);
+  const TermsIdentification::Estimate terms = terms_id_.estimate();
   r.identified_mass = estimate.mass;
   r.model_mass = model_.params().M;
-  const double resolution = config_.identification.mass_resolution;
-  if (config_.identification.mass && std::isnan(resolve_request_) && std::isnan(job_resolve_) &&
-      !staged_.ready && mass_id_.LeavesModel(r.model_mass)) {
-    resolve_request_ = std::max(resolution, std::round(estimate.mass / resolution) * resolution);
+  r.identified_terms = terms;
+  const HopperParams& model = model_.params();
+  r.model_params = model;
+  const IdentificationSettings& id = config_.identification;
+  if ((id.mass || id.terms) && !resolve_request_ && !job_resolve_ && !staged_.ready) {
+    resolve_request_ = IdentifiedModel(model, mass_id_, id.mass, id.mass_resolution, terms_id_,
+                                       id.terms, id.term_resolution);
   }
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
@@ -578,7 +632,7 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   job_hop_ = hop_;
   job_end_ = t;
   job_resolve_ = resolve_request_;  // the offline part re-solves u^0 after the trial
-  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
+  resolve_request_.reset();
   ++hop_;
   job_.store(Job::kPosted, std::memory_order_release);
   if (Synchronous()) {
@@ -612,7 +666,7 @@ void HopperController::RunOffline() {
                                          : std::vector<Vector>());
     }
     next_law_ = learned != nullptr ? learned : &fallback_;
-    if (!std::isnan(job_resolve_)) ResolveModel(job_resolve_);
+    if (job_resolve_) ResolveModel(*job_resolve_);
     offline_error_.clear();
   } catch (const std::exception& e) {
     offline_error_ = std::string("offline part: ") + e.what();
@@ -633,12 +687,12 @@ void HopperController::TakeOfflineResult() {
   // measured_latency: the law takes effect no sooner than this computer produced it.
   double latency = config_.offline_latency;
   if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
-  if (!std::isnan(job_resolve_) && staged_.ready) {  // this hop re-solved u^0: it takes over
+  if (job_resolve_ && staged_.ready) {  // this hop re-solved u^0: it takes over
     resolves_.push_back(staged_.record);
     if (!Synchronous()) law_pending_ = true;
     latency = std::max(latency, config_.identification.resolve_latency);
   }
-  job_resolve_ = std::numeric_limits<double>::quiet_NaN();
+  job_resolve_.reset();
   if (law_pending_) law_due_ = job_end_ + latency;
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;

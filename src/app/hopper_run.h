@@ -88,6 +88,8 @@ struct RunOverrides {
   std::string preset;
   /// --identify / --no-identify: IdentificationSettings::mass (overrides the scenario and preset)
   std::optional<bool> identify;
+  /// --identify-terms / --no-identify-terms: IdentificationSettings::terms (overrides the scenario)
+  std::optional<bool> identify_terms;
   /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE (set
   /// and empty: off), then, when `user_law_cache`, DefaultLawCacheDir(), else off.
   std::string law_cache;
