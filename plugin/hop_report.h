@@ -81,6 +81,7 @@ struct ModelResolve {
   double slope = 0.0;     ///< the new model's floor slope, rad
   double j_body = 0.0;    ///< the new model's J_body, kg m^2
   double j_leg = 0.0;     ///< the new model's J_leg, kg m^2
+  double c_d = 0.0;       ///< the new model's c_d, kg/m
   double wall_ms = 0.0;   ///< wall time of the re-solve (gait + u^0, or the law cache), ms
   int took_over_hop = -1; ///< the hop in which the new u^0 took over (-1: not yet)
   std::string law_cache;  ///< where the new u^0 came from (as law_cache_status())

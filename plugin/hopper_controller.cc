@@ -13,6 +13,13 @@
 namespace ddoc::plugin {
 namespace {
 
+// The foot's x velocity in a flight-coordinate state: xd + d/dt(r sin theta).
+double FootVelocityX(const Eigen::Matrix<double, 14, 1>& xf) {
+  const double th = xf(hopper::kTheta);
+  return xf(hopper::kXd) + xf(hopper::kRd) * std::sin(th) +
+         xf(hopper::kR) * xf(hopper::kThetad) * std::cos(th);
+}
+
 // (x, y, xd, yd) of a flight-coordinate state.
 Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
   return Eigen::Vector4d(xf(hopper::kX), xf(hopper::kY), xf(hopper::kXd), xf(hopper::kYd));
@@ -255,6 +262,7 @@ void HopperController::ResolveModel(const HopperParams& params) {
   staged_.record.slope = params.slope;
   staged_.record.j_body = params.J_body;
   staged_.record.j_leg = params.J_leg;
+  staged_.record.c_d = params.c_d;
   staged_.record.law_cache = u0.status;
   staged_.record.wall_ms =
       1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -398,6 +406,9 @@ void HopperController::Step(const mjData* d) {
   if (!started_) {
     started_ = true;
     BeginHop(t, xf_);
+    // A state placed by Reset or RestartHop, not a takeoff from the floor: no foothold (on a
+    // soft floor the feet of the takeoffs are sunk, the placed one is not).
+    balances_.start_foot_x = balances_.start_foot_y = HopIdentificationData::kNaN;
   }
   if (change == ContactChange::kTouchdown && substep && t > hist_t_[0]) {
     // x^-(T1) between the last flight step and this one, at the detector's instant.
@@ -412,6 +423,7 @@ void HopperController::Step(const mjData* d) {
     EndHop(t, xf_);
     BeginHop(t, xf_);
   }
+  if (flight && !flight_clear_) StartFlightBalance(d);
   if (job_.load(std::memory_order_acquire) == Job::kDone) TakeOfflineResult();
   DeployLawWhenDue(t);
 
@@ -490,6 +502,12 @@ void HopperController::AddBalances(const mjData* d, bool was_stance, double t_pr
   const double thetad = flight ? xf_(hopper::kThetad) : xs_(hopper::kSThetad);
   balances_.hip.Add(Eigen::Vector2d(phid - prev_phid_, (phid - thetad) * h),
                     d->ctrl[map_.act_hip] * h);
+  // The flight's drag, at the body's rate when the step's drag was applied, over the steps from
+  // the first state whose foot is clear of the floor (StartFlightBalance) to the touchdown state
+  // (the touchdown step ends before the impact).
+  if (flight_clear_ && !was_stance) {
+    balances_.flight_drag += prev_body_v_(0) * std::abs(prev_body_v_(0)) * h;
+  }
   // The radial balance over a step with both ends in stance, after the impact step.
   if (flight || !was_stance || !(t_prev > touchdown_step_)) return;
   const double theta = last_stance_(hopper::kSTheta);
@@ -501,6 +519,15 @@ void HopperController::AddBalances(const mjData* d, bool was_stance, double t_pr
   balances_.leg_work += d->ctrl[map_.act_leg] * wr * h;
   balances_.leg_motion += (dv + g * std::cos(theta) * h) * wr;
   balances_.leg_rate_sq += rd1 * wr * h;
+}
+
+void HopperController::StartFlightBalance(const mjData* d) {
+  // After the takeoff the foot can touch the floor for a step or two with a normal force below
+  // the detector's 0.5 N and a friction force up to 1000 times it; the balance starts at the
+  // first state without a foot-floor contact (the next step's solve has none).
+  if (FootTouchesFloor(map_, d, 0.0)) return;
+  flight_clear_ = true;
+  start_momentum_ << xf_(hopper::kXd), FootVelocityX(xf_);
 }
 
 void HopperController::Record(double t) {
@@ -542,6 +569,8 @@ void HopperController::BeginHop(double t, const FlightState14& x) {
   effort_ = 0.0;
   stance_impulse_ = 0.0;
   balances_ = HopIdentificationData();
+  balances_.flight_drag = 0.0;
+  flight_clear_ = false;
   balances_.start_foot_x = HopperModel::FootX(x);
   balances_.start_foot_y = HopperModel::FootHeight(x);
   balances_.leg_work = balances_.leg_motion = balances_.leg_rate_sq = 0.0;
@@ -559,6 +588,9 @@ void HopperController::Touchdown(double t, const FlightState14& x) {
   report_.body_touchdown = BodyState(x);
   report_.foot_height_td = HopperModel::FootHeight(x);
   foot_td_x_ = x(hopper::kX) + x(hopper::kR) * std::sin(x(hopper::kTheta));
+  balances_.flight_dxd = x(hopper::kXd) - start_momentum_(0);
+  balances_.flight_foot_dp =
+      robot_model_->body_mass[map_.body_foot] * (FootVelocityX(x) - start_momentum_(1));
   phase_start_ = t;
   stance_first_ = true;
   touchdown_step_ = last_time_;

@@ -51,8 +51,8 @@ struct PitchFeedbackExperiment {
 /// it with a new driver. Off by default (the paper keeps the model fixed).
 struct IdentificationSettings {
   bool mass = false;  ///< act on the mass estimate (re-solve u^0); false: estimate and report only
-  /// Act on the estimates of b_leg, b_hip, J_body (J_leg scaled with it) and the floor slope
-  /// (HopperParams); default false.
+  /// Act on the estimates of b_leg, b_hip, J_body (J_leg scaled with it), c_d and the floor
+  /// slope (HopperParams); default false.
   bool terms = false;
   TermsIdentification::Settings terms_estimator;  ///< their gates, confidence and tolerances
   /// The re-solved model's terms are the estimates rounded to these.
@@ -230,6 +230,8 @@ class HopperController {
   // Adds the last step [t_prev, t_prev + h] to the hop's pitch balance and, for a stance step
   // from the first post-impact state on (t_prev > the touchdown step), to its radial balance.
   void AddBalances(const mjData* d, bool was_stance, double t_prev, double h);
+  // In flight: starts the flight's momentum balance at this state once the foot has no contact.
+  void StartFlightBalance(const mjData* d);
   // The hop ends at t; x: the flight state there (the next hop's start).
   void EndHop(double t, const FlightState14& x);
   void BeginHop(double t, const FlightState14& x);
@@ -317,6 +319,9 @@ class HopperController {
   HopIdentificationData balances_;  // the hop's radial and pitch sums (identification)
   double prev_phid_ = 0.0;          // phid of the previous step (the pitch balance)
   Eigen::Vector2d prev_body_v_ = Eigen::Vector2d::Zero();  // (xd, yd) of the previous step
+  // The flight balance's start (xd, the foot's x rate) and whether it has started (the foot clear).
+  Eigen::Vector2d start_momentum_ = Eigen::Vector2d::Zero();
+  bool flight_clear_ = false;
   double foot_td_x_ = 0.0, prev_foot_td_x_ = 0.0;
   bool have_prev_td_ = false;
 

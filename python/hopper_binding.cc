@@ -389,6 +389,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
     d["slope"] = r.slope;
     d["j_body"] = r.j_body;
     d["j_leg"] = r.j_leg;
+    d["c_d"] = r.c_d;
     d["took_over_hop"] = r.took_over_hop;
     d["wall_ms"] = r.wall_ms;
     d["initial_law"] = r.law_cache;
@@ -463,8 +464,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
   substep_events   locate touchdown and takeoff inside the physics step (--substep-events)
   identify         True/False: identify the mass and re-solve u^0 on it (--identify/--no-identify)
-  identify_terms   True/False: identify b_leg, b_hip, J_body (J_leg with it) and the floor slope
-                   and re-solve u^0 on them (--identify-terms/--no-identify-terms)
+  identify_terms   True/False: identify b_leg, b_hip, J_body (J_leg with it), c_d and the floor
+                   slope and re-solve u^0 on them (--identify-terms/--no-identify-terms)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
@@ -474,7 +475,7 @@ wall time of the hop's offline part and the simulated latency of its law); 'traj
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written), initial_law (where u^0 came from, as summary.json's
 initial_law) and resolves (the re-solves of u^0 on an identified model: hop, mass, b_leg, b_hip,
-slope, j_body, j_leg, took_over_hop, wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
+slope, j_body, j_leg, c_d, took_over_hop, wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
 ddoc.SolveInterrupted with the partial result in .result; a controller failure or a non-finite
 MuJoCo state raises ddoc.RunFailed with it in .result; MuJoCo's warnings are RuntimeWarnings.)");

@@ -174,7 +174,7 @@ void RunLog::WriteSummary(const Summary& s) {
   const HopperParams& p = s.model_params;
   for (const auto& [name, term, model] :  // value null: not measured yet; se null: not determined
        {std::tuple{"b_leg", &e.b_leg, p.b_leg}, {"b_hip", &e.b_hip, p.b_hip},
-        {"j_body", &e.j_body, p.J_body}, {"slope", &e.slope, p.slope}}) {
+        {"j_body", &e.j_body, p.J_body}, {"c_d", &e.c_d, p.c_d}, {"slope", &e.slope, p.slope}}) {
     j["identification"][std::string("identified_") + name] = {
         {"value", term->value}, {"se", term->se}, {"hops", term->samples},
         {"rejected", term->rejected}};
@@ -189,6 +189,7 @@ void RunLog::WriteSummary(const Summary& s) {
          {"slope", r.slope},
          {"j_body", r.j_body},
          {"j_leg", r.j_leg},
+         {"c_d", r.c_d},
          {"took_over_hop", HopOrNull(r.took_over_hop)},
          {"wall_ms", r.wall_ms},
          {"initial_law", r.law_cache}});

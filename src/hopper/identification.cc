@@ -196,6 +196,14 @@ BlockRegression::Settings TermsIdentification::Settings::DefaultHip() {
   return s;
 }
 
+OriginRegression::Settings TermsIdentification::Settings::DefaultDrag() {
+  OriginRegression::Settings s;
+  s.min_samples = 2;
+  s.decide_after = 1;
+  s.absolute_floor = 2e-5;  // N s
+  return s;
+}
+
 OriginRegression::Settings TermsIdentification::Settings::DefaultSlope() {
   OriginRegression::Settings s;
   s.min_samples = 2;
@@ -205,11 +213,16 @@ OriginRegression::Settings TermsIdentification::Settings::DefaultSlope() {
 }
 
 TermsIdentification::TermsIdentification(const Settings& settings)
-    : settings_(settings), leg_(settings.leg), slope_(settings.slope), hip_(settings.hip) {
+    : settings_(settings),
+      leg_(settings.leg),
+      drag_(settings.drag),
+      slope_(settings.slope),
+      hip_(settings.hip) {
   for (const auto& [name, value] : {std::pair{"z", settings.z},
                                     {"b_leg_tolerance", settings.b_leg_tolerance},
                                     {"b_hip_tolerance", settings.b_hip_tolerance},
                                     {"inertia_tolerance", settings.inertia_tolerance},
+                                    {"drag_tolerance", settings.drag_tolerance},
                                     {"slope_tolerance", settings.slope_tolerance}}) {
     if (!(value >= 0) || !std::isfinite(value)) {
       throw InvalidArgument(std::string("TermsIdentification: ") + name + " = " +
@@ -221,12 +234,14 @@ TermsIdentification::TermsIdentification(const Settings& settings)
 void TermsIdentification::Reset() {
   leg_.Reset();
   hip_.Reset();
+  drag_.Reset();
   slope_.Reset();
 }
 
 void TermsIdentification::Add(const HopIdentificationData& hop, double mass) {
   if (std::isfinite(mass)) {
     leg_.Add(hop.leg_rate_sq, hop.leg_work - mass * hop.leg_motion);  // = b_leg leg_rate_sq
+    drag_.Add(hop.flight_drag, -(mass * hop.flight_dxd + hop.flight_foot_dp));  // = c_d drag
   }
   hip_.Add(hop.hip);
   slope_.Add(hop.end_foot_x - hop.start_foot_x, hop.end_foot_y - hop.start_foot_y);
@@ -266,6 +281,7 @@ TermsIdentification::Estimate TermsIdentification::estimate() const {
   e.b_leg = TermOf(leg_);
   e.j_body = TermOf(hip_, 0);
   e.b_hip = TermOf(hip_, 1);
+  e.c_d = TermOf(drag_);
   e.slope = TermOf(slope_);
   // slope = atan(tan(slope)); se through the derivative 1 / (1 + tan^2).
   const double tan_slope = e.slope.value;
@@ -277,7 +293,7 @@ TermsIdentification::Estimate TermsIdentification::estimate() const {
 bool TermsIdentification::Determined() const {
   const Estimate e = estimate();
   return e.b_leg.determined() && e.b_hip.determined() && e.j_body.determined() &&
-         e.slope.determined();
+         e.c_d.determined() && e.slope.determined();
 }
 
 bool TermsIdentification::LeavesModel(const HopperParams& model) const {
@@ -286,6 +302,7 @@ bool TermsIdentification::LeavesModel(const HopperParams& model) const {
   return Leaves(e.b_leg, model.b_leg, z, settings_.b_leg_tolerance) ||
          Leaves(e.b_hip, model.b_hip, z, settings_.b_hip_tolerance) ||
          Leaves(e.j_body, model.J_body, z, rel * model.J_body) ||
+         Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance) ||
          Leaves(e.slope, model.slope, z, settings_.slope_tolerance);
 }
 
@@ -307,6 +324,9 @@ HopperParams TermsIdentification::Identified(const HopperParams& model,
     p.J_body = ratio * model.J_body;
     p.J_leg = ratio * model.J_leg;
   }
+  if (Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance)) {
+    p.c_d = std::max(0.0, Rounded(e.c_d.value, resolution.c_d));
+  }
   if (Leaves(e.slope, model.slope, z, settings_.slope_tolerance)) {
     const double limit = 0.9 * HopperParams::kMaxSlope;  // what the model accepts, with a margin
     p.slope = std::min(limit, std::max(-limit, Rounded(e.slope.value, resolution.slope)));
@@ -319,8 +339,8 @@ std::optional<HopperParams> IdentifiedModel(const HopperParams& model,
                                             double mass_resolution,
                                             const TermsIdentification& terms, bool act_on_terms,
                                             const TermsIdentification::Resolution& resolution) {
-  // One re-solve for all: decided once everything acted on is determined.
-  if (act_on_terms && !terms.Determined()) return std::nullopt;
+  // Decided once the mass (when acted on) is determined; a term joins once it is (the slope
+  // needs a hop between two takeoffs), until then it keeps the model's value.
   if (act_on_mass && !std::isfinite(mass.estimate().mass_se)) return std::nullopt;
   const bool mass_leaves = act_on_mass && mass.LeavesModel(model.M);
   if (!mass_leaves && !(act_on_terms && terms.LeavesModel(model))) return std::nullopt;

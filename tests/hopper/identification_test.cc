@@ -181,9 +181,11 @@ TEST(IdentificationTest, BlockRegressionIsLeastSquaresOverBlocks) {
 
 // A hop of a robot with the given terms, written from the balances themselves (no noise unless
 // given): the radial balance's sums with leg_work = M leg_motion + b_leg leg_rate_sq, the pitch
-// balance's rows with tau h = J_body dphid + b_hip w h, and a step along the floor line.
+// balance's rows with tau h = J_body dphid + b_hip w h, the flight's momentum with -(M dxd +
+// foot_dp) = c_d drag, and a step along the floor line.
 HopIdentificationData SyntheticHop(double M, double b_leg, double j_body, double b_hip,
-                                   double slope, double x0, std::mt19937* rng, double noise) {
+                                   double slope, double x0, std::mt19937* rng, double noise,
+                                   double c_d = 0.0) {
   std::normal_distribution<double> n(0.0, 1.0);
   HopIdentificationData h;
   h.stance_velocity = 2.0 * 2.43 + 9.81 * 0.29;
@@ -197,11 +199,14 @@ HopIdentificationData SyntheticHop(double M, double b_leg, double j_body, double
     h.hip.Add(Eigen::Vector2d(dphid, w * dt),
               j_body * dphid + b_hip * w * dt + 1e-7 * noise * n(*rng));
   }
+  h.flight_drag = 0.07 + 0.01 * n(*rng);
+  h.flight_dxd = -1.5e-4 + 2e-5 * n(*rng);
+  h.flight_foot_dp = -c_d * h.flight_drag - M * h.flight_dxd + 2e-6 * noise * n(*rng);
   const double step = 0.27 + 0.01 * n(*rng);
   h.start_foot_x = x0;
-  h.start_foot_y = x0 * std::tan(slope) + 2e-4 * noise * n(*rng);
+  h.start_foot_y = x0 * std::tan(slope) + 5e-5 * noise * n(*rng);
   h.end_foot_x = x0 + step;
-  h.end_foot_y = (x0 + step) * std::tan(slope) + 2e-4 * noise * n(*rng);
+  h.end_foot_y = (x0 + step) * std::tan(slope) + 5e-5 * noise * n(*rng);
   return h;
 }
 
@@ -212,7 +217,8 @@ TEST(IdentificationTest, TheTermsOfARobotThatIsNotTheModel) {
   std::mt19937 rng(5);
   TermsIdentification id;
   MassIdentification mass;
-  const HopIdentificationData hop = SyntheticHop(8.0, 2.0, 3.125, 0.5, -0.02, 0.0, &rng, 1.0);
+  const HopIdentificationData hop =
+      SyntheticHop(8.0, 2.0, 3.125, 0.5, -0.02, 0.0, &rng, 1.0, 0.0125);
   mass.Add(hop);
   id.Add(hop, mass.estimate().mass);
   ASSERT_TRUE(id.Determined());
@@ -221,7 +227,8 @@ TEST(IdentificationTest, TheTermsOfARobotThatIsNotTheModel) {
   EXPECT_NEAR(e.b_hip.value, 0.5, 0.02);
   EXPECT_NEAR(e.j_body.value, 3.125, 0.01 * 3.125);
   EXPECT_NEAR(e.slope.value, -0.02, 0.001);
-  HopperParams model;  // the paper's: no dampers, level floor, J_body 2.5
+  EXPECT_NEAR(e.c_d.value, 0.0125, 0.001);
+  HopperParams model;  // the paper's: no dampers, no drag, level floor, J_body 2.5
   EXPECT_TRUE(id.LeavesModel(model));
   const HopperParams p = id.Identified(model, TermsIdentification::Resolution());
   EXPECT_NEAR(p.b_leg, 2.0, 0.1);
@@ -230,6 +237,7 @@ TEST(IdentificationTest, TheTermsOfARobotThatIsNotTheModel) {
   EXPECT_NEAR(p.J_body, 3.125, 0.03);
   EXPECT_NEAR(p.J_leg / p.J_body, model.J_leg / model.J_body, 1e-12);
   EXPECT_NEAR(p.slope, -0.02, 0.001);
+  EXPECT_NEAR(p.c_d, 0.0125, 0.001);
   EXPECT_EQ(p.M, model.M);  // the mass is MassIdentification's
   EXPECT_FALSE(id.LeavesModel(p));
   // A robot with only a leg damper moves only b_leg.
@@ -240,6 +248,7 @@ TEST(IdentificationTest, TheTermsOfARobotThatIsNotTheModel) {
   EXPECT_EQ(q.b_hip, 0.0);
   EXPECT_EQ(q.J_body, model.J_body);
   EXPECT_EQ(q.J_leg, model.J_leg);
+  EXPECT_EQ(q.c_d, 0.0);
   EXPECT_EQ(q.slope, 0.0);
 }
 
@@ -269,8 +278,9 @@ TEST(IdentificationTest, NoisyHopsOfAMatchingRobotNeverLeaveTheModel) {
   EXPECT_GE(id.Identified(damped, TermsIdentification::Resolution()).b_leg, 0.0);
 }
 
-// IdentifiedModel decides once everything acted on is determined, and moves only what leaves.
-TEST(IdentificationTest, TheIdentifiedModelWaitsForEveryTermAndMovesWhatLeaves) {
+// IdentifiedModel decides once the mass (when acted on) is determined, moves only what leaves,
+// and a term determined later (the slope) can move the model again.
+TEST(IdentificationTest, TheIdentifiedModelMovesWhatLeavesOnceTheMassIsKnown) {
   std::mt19937 rng(2);
   const HopperParams model;
   MassIdentification::Settings one_stance;
@@ -281,29 +291,43 @@ TEST(IdentificationTest, TheIdentifiedModelWaitsForEveryTermAndMovesWhatLeaves) 
   const TermsIdentification::Resolution res;
   // Nothing measured: nothing decided.
   EXPECT_FALSE(IdentifiedModel(model, mass, true, 1e-3, terms, true, res));
-  HopIdentificationData hop = SyntheticHop(12.0, 0.0, 2.5, 0.0, 0.0, 0.0, &rng, 1.0);
-  hop.start_foot_x = HopIdentificationData::kNaN;  // no slope sample yet
-  mass.Add(hop);
-  terms.Add(hop, mass.estimate().mass);
+  // The first hop: no slope sample yet (no takeoff before it), the robot 12 kg with a damper.
+  HopIdentificationData hop = SyntheticHop(12.0, 2.0, 2.5, 0.0, -0.02, 0.0, &rng, 1.0);
+  hop.start_foot_x = HopIdentificationData::kNaN;
+  terms.Add(hop, 12.0);  // the terms alone: decided without the mass
   EXPECT_FALSE(terms.Determined());
-  EXPECT_FALSE(IdentifiedModel(model, mass, true, 1e-3, terms, true, res)) << "the slope waits";
+  std::optional<HopperParams> p = IdentifiedModel(model, mass, false, 1e-3, terms, true, res);
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->M, model.M);
+  EXPECT_NEAR(p->b_leg, 2.0, 0.1);
+  EXPECT_EQ(p->slope, 0.0) << "not determined yet: the model's";
+  EXPECT_FALSE(IdentifiedModel(model, mass, true, 1e-3, terms, true, res)) << "the mass waits";
+  mass.Add(hop);
+  p = IdentifiedModel(model, mass, true, 1e-3, terms, true, res);
+  ASSERT_TRUE(p);
+  EXPECT_NEAR(p->M, 12.0, 1e-3);
+  EXPECT_EQ(p->M, std::round(p->M / 1e-3) * 1e-3);
+  EXPECT_NEAR(p->b_leg, 2.0, 0.1);
+  EXPECT_EQ(p->b_hip, 0.0);  // what the robot does not have stays the model's
+  EXPECT_EQ(p->J_body, model.J_body);
+  EXPECT_EQ(p->c_d, 0.0);
+  EXPECT_EQ(p->slope, 0.0);
   const std::optional<HopperParams> mass_only =
       IdentifiedModel(model, mass, true, 1e-3, terms, false, res);
   ASSERT_TRUE(mass_only);
   EXPECT_NEAR(mass_only->M, 12.0, 1e-3);
-  EXPECT_EQ(mass_only->M, std::round(mass_only->M / 1e-3) * 1e-3);
   EXPECT_EQ(mass_only->b_leg, 0.0);
-  hop = SyntheticHop(12.0, 0.0, 2.5, 0.0, 0.0, 0.3, &rng, 1.0);
+  // The next hop determines the slope: the re-solved model is left again, for the slope only.
+  hop = SyntheticHop(12.0, 2.0, 2.5, 0.0, -0.02, 0.3, &rng, 1.0);
   mass.Add(hop);
   terms.Add(hop, mass.estimate().mass);
-  const std::optional<HopperParams> p = IdentifiedModel(model, mass, true, 1e-3, terms, true, res);
-  ASSERT_TRUE(p);
-  EXPECT_NEAR(p->M, 12.0, 1e-3);
-  EXPECT_EQ(p->b_leg, 0.0);  // a robot without the terms: they stay the model's
-  EXPECT_EQ(p->b_hip, 0.0);
-  EXPECT_EQ(p->J_body, model.J_body);
-  EXPECT_EQ(p->slope, 0.0);
-  EXPECT_FALSE(IdentifiedModel(*p, mass, true, 1e-3, terms, true, res)) << "no second re-solve";
+  EXPECT_TRUE(terms.Determined());
+  const std::optional<HopperParams> q = IdentifiedModel(*p, mass, true, 1e-3, terms, true, res);
+  ASSERT_TRUE(q);
+  EXPECT_NEAR(q->slope, -0.02, 0.001);
+  EXPECT_EQ(q->M, p->M);
+  EXPECT_EQ(q->b_leg, p->b_leg);
+  EXPECT_FALSE(IdentifiedModel(*q, mass, true, 1e-3, terms, true, res)) << "no third re-solve";
   EXPECT_FALSE(IdentifiedModel(model, mass, false, 1e-3, terms, false, res)) << "nothing acted on";
 }
 

@@ -145,7 +145,14 @@ TEST(ControllerIdentificationTest, SynchronousLearningTakesOverAtTheTakeoff) {
   ASSERT_TRUE(rig.ok());
   const std::vector<HopReport> reports = RunHops(&rig, 8);
   ASSERT_EQ(reports.size(), 8u);
-  ASSERT_EQ(rig.c().resolves().size(), 1u);
+  std::string resolves;
+  for (const ModelResolve& q : rig.c().resolves()) {
+    resolves += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
+                std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
+                std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
+                std::to_string(q.slope) + ")";
+  }
+  ASSERT_EQ(rig.c().resolves().size(), 1u) << resolves;
   const ModelResolve& r = rig.c().resolves()[0];
   EXPECT_EQ(r.took_over_hop, r.hop + 1);
   // Hops took_over, took_over + 1 run u^0 (warm-up), took_over + 2 initializes; the learner's
@@ -172,10 +179,11 @@ void WeakerMotors(mjModel* m) {
 }
 
 // The terms of the MJCF variants, one test each (10 kg robots with a leg damper of 4 N s/m, a
-// hip damper of 0.5 N m s/rad, a floor 2 deg down hill, or motors at 80 %): after the first hop
-// the 10 kg paper's model leaves the estimates, u^0 is solved again once on the identified
-// terms (each within its tolerance of the robot's; the others as they were) and takes over in
-// the next flight; after 8 hops every estimate is within 1 % (slope: 0.2 mrad) of the robot's.
+// hip damper of 0.5 N m s/rad, a floor 2 deg down hill, or motors at 80 %; no drag): after the
+// first hop (the slope: the second, the first between two takeoffs) the 10 kg paper's model
+// leaves the estimates, u^0 is solved again once on the identified terms (each within its
+// tolerance of the robot's; the others as they were) and takes over in the next flight; after
+// 8 hops every estimate is within 1 % (slope: 0.5 mrad, drag 1e-4 kg/m) of the robot's.
 void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double gain) {
   Robot rig(mjcf, IdentifyingTerms(Method::kOcfb), false, edit);
   ASSERT_TRUE(rig.ok());
@@ -185,18 +193,32 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   const double b_leg = map.leg_damping / gain, b_hip = map.hip_damping / gain;
   const double j_body = rig.m()->body_inertia[3 * map.body_torso + 1] / gain;
   const double slope = map.floor_slope;
+  const double c_d = map.drag_cd / gain;
   const std::vector<HopReport> reports = RunHops(&rig, 8);
   ASSERT_EQ(reports.size(), 8u);
-  ASSERT_EQ(rig.c().resolves().size(), 1u);
-  const ModelResolve& r = rig.c().resolves()[0];
-  EXPECT_EQ(r.hop, 0);
-  EXPECT_EQ(r.took_over_hop, 1);
+  std::string resolves;
+  for (const ModelResolve& q : rig.c().resolves()) {
+    resolves += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
+                std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
+                std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
+                std::to_string(q.slope) + ")";
+  }
+  // One re-solve; on the slope a second may refine its first pair's estimate (1.9 mrad off on
+  // this robot, more than the 1 mrad tolerance).
+  ASSERT_GE(rig.c().resolves().size(), 1u);
+  ASSERT_LE(rig.c().resolves().size(), slope != 0.0 ? 2u : 1u) << resolves;
+  const ModelResolve& first = rig.c().resolves()[0];
+  EXPECT_EQ(first.hop, slope != 0.0 ? 1 : 0);
+  EXPECT_EQ(first.took_over_hop, first.hop + 1);
+  EXPECT_NEAR(first.slope, slope, 3e-3);
+  const ModelResolve& r = rig.c().resolves().back();
   const TermsIdentification::Settings tol;
   EXPECT_NEAR(r.b_leg, b_leg, tol.b_leg_tolerance);
   EXPECT_NEAR(r.b_hip, b_hip, tol.b_hip_tolerance);
   EXPECT_NEAR(r.j_body, j_body, tol.inertia_tolerance * j_body);
   EXPECT_NEAR(r.j_leg / r.j_body, 0.25 / 2.5, 1e-12);
   EXPECT_NEAR(r.slope, slope, tol.slope_tolerance);
+  EXPECT_NEAR(r.c_d, c_d, tol.drag_tolerance);
   const HopperParams& p = rig.c().model_params();
   EXPECT_EQ(p.b_leg, r.b_leg);
   EXPECT_EQ(p.slope, r.slope);
@@ -204,11 +226,15 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   EXPECT_NEAR(e.b_leg.value, b_leg, 0.01 * b_leg + 0.02);
   EXPECT_NEAR(e.b_hip.value, b_hip, 0.01 * b_hip + 1e-3);
   EXPECT_NEAR(e.j_body.value, j_body, 0.01 * j_body);
-  EXPECT_NEAR(e.slope.value, slope, 2e-4);
+  EXPECT_NEAR(e.slope.value, slope, 5e-4);
+  // With weaker motors the mass reads M / g but the 2 g foot's momentum does not: the drag reads
+  // 0.003 kg/m on this drag-free robot, inside the tolerance.
+  EXPECT_NEAR(e.c_d.value, c_d, gain == 1.0 ? 1e-4 : tol.drag_tolerance);
   EXPECT_EQ(e.b_leg.rejected + e.b_hip.rejected + e.slope.rejected, 0);
   for (const HopReport& h : reports) {  // the reports say which model ran
-    EXPECT_EQ(h.model_params.b_leg, h.hop < r.took_over_hop ? 0.0 : r.b_leg) << h.hop;
-    EXPECT_EQ(h.model_params.slope, h.hop < r.took_over_hop ? 0.0 : r.slope) << h.hop;
+    EXPECT_EQ(h.model_params.b_leg, h.hop < first.took_over_hop ? 0.0 : first.b_leg) << h.hop;
+    EXPECT_EQ(h.model_params.J_body, h.hop < first.took_over_hop ? 2.5 : first.j_body) << h.hop;
+    if (h.hop >= r.took_over_hop) EXPECT_EQ(h.model_params.slope, r.slope) << h.hop;
   }
 }
 
@@ -266,6 +292,10 @@ TEST(ControllerIdentificationTest, TheTermsNeverFlipAndAreDeterministic) {
   ASSERT_EQ(rb.size(), 12u);
   ASSERT_EQ(rc.size(), 12u);
   ASSERT_EQ(a.c().resolves().size(), 1u);
+  // The 8 kg robot's drag (0.01 kg/m) and the damper, on the 10 kg drag-free model.
+  EXPECT_NEAR(a.c().resolves()[0].c_d, 0.01, 2e-4);
+  EXPECT_NEAR(a.c().resolves()[0].b_leg, 2.0, 0.1);
+  EXPECT_NEAR(a.c().terms_identification().estimate().c_d.value, 0.01, 1e-4);
   EXPECT_FALSE(a.c().terms_identification().LeavesModel(a.c().model_params()));
   EXPECT_FALSE(a.c().mass_identification().LeavesModel(a.c().model_params().M));
   for (Robot* r : {&b, &c}) {

@@ -137,19 +137,22 @@ def test_run_hopper_identify():
 
 
 def test_run_hopper_identify_terms():
-    # identify_terms=True (--identify-terms) on the 8 kg robot with its 8 kg model: nothing to
-    # re-solve on (no dampers, level floor); the resolves list carries the terms when there are.
+    # identify_terms=True (--identify-terms) on the 8 kg robot (c_d 0.01) with the 10 kg drag-free
+    # model: u^0 is re-solved on the drag after the first hop, the mass stays the model's (that
+    # is identify=True); no dampers, level floor, the body's inertia as the model's.
     kw = dict(method="ocfb", hops=3, log_every=0)
     plain = ddoc.run_hopper(SCENARIO, **kw)
+    off = ddoc.run_hopper(SCENARIO, identify_terms=False, **kw)
+    np.testing.assert_array_equal(plain["cost"], off["cost"])
+    assert off["resolves"] == []
     on = ddoc.run_hopper(SCENARIO, identify_terms=True, **kw)
-    np.testing.assert_array_equal(plain["cost"], on["cost"])
-    assert on["resolves"] == []
-    both = ddoc.run_hopper(SCENARIO, identify=True, identify_terms=True, **kw)
-    assert len(both["resolves"]) == 1
-    r = both["resolves"][0]
-    assert abs(r["mass"] - 8.001) < 0.01
+    assert len(on["resolves"]) == 1
+    r = on["resolves"][0]
+    assert r["hop"] == 0 and abs(r["c_d"] - 0.01) < 2e-4 and r["mass"] == 10.0
     assert r["b_leg"] == 0.0 and r["b_hip"] == 0.0 and r["slope"] == 0.0
     assert r["j_body"] == 2.5
+    both = ddoc.run_hopper(SCENARIO, identify=True, identify_terms=True, **kw)
+    assert abs(both["resolves"][0]["mass"] - 8.001) < 0.01
 
 
 def test_run_hopper_log_every():

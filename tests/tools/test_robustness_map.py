@@ -180,7 +180,7 @@ class SummaryTest(TempDirTest):
         # a down-hill floor is a negative model slope.
         self.assertEqual(rm.true_terms(8.0, "gain", 0.8),
                          {"mass": 8.001 / 0.8, "b_leg": 0.0, "b_hip": 0.0, "j_body": 2.5 / 0.8,
-                          "slope": 0.0})
+                          "c_d": 0.01 / 0.8, "slope": 0.0})
         self.assertEqual(rm.true_terms(12.0, "slope_down", 0.02)["slope"], -0.02)
         self.assertEqual(rm.true_terms(12.0, "b_leg", 3.0)["b_leg"], 3.0)
         grid = rm.grid_from_args(rm.run_parser().parse_args(
@@ -195,11 +195,11 @@ class SummaryTest(TempDirTest):
                            kind=keys["kind"], level=rm.dr.label(keys["level"]),
                            identification="terms")
             row.update(id_mass="8.002", id_b_leg=str(b_leg), id_b_hip="0", id_j_body="2.5",
-                       id_slope=str(slope))
+                       id_c_d="0.0101", id_slope=str(slope))
             rows.append(row)
         text = "\n".join(rm.identification_errors(grid, rows))
-        self.assertIn("| 8 | b_leg | 0.001 | 0.05 | 0 | 0 | 0.0003 |", text)
-        self.assertIn("| 8 | slope_down | 0.001 | 0.02 | 0 | 0 | 0.0002 |", text)
+        self.assertIn("| 8 | b_leg | 0.001 | 0.05 | 0 | 0 | 0.0001 | 0.0003 |", text)
+        self.assertIn("| 8 | slope_down | 0.001 | 0.02 | 0 | 0 | 0.0001 | 0.0002 |", text)
 
     def test_unmodelled_counts(self):
         # 8 kg robot, kinds b_leg (levels 1, 4) and gain (0.9): alg1 survives all three, ocfb

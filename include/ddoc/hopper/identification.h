@@ -1,14 +1,14 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 //
 // Online identification of the hopper's mass and of the model terms of issue 44 (leg damping,
-// hip damping, floor slope; and the body's inertia, which also carries a weaker hip motor) from
-// measured hops: each hop gives the sums of a regression (the stance's vertical impulse for M,
-// its radial balance for b_leg, the body's pitch balance for J_body and b_hip,
-// the step between two footholds for the slope), estimated by least squares with an outlier gate
-// and a standard error, and a decision whether the model's value is still inside the estimate's
-// confidence region. No I/O; the plugin
-// measures the hops (HopReport::identification), this unit does the arithmetic. docs/hopper.md,
-// "Identifying the mass" and "Identifying the model terms".
+// hip damping, floor slope; the body's inertia, which also carries a weaker hip motor; the air
+// drag) from measured hops: each hop gives the sums of a regression (the stance's vertical
+// impulse for M, its radial balance for b_leg, the body's pitch balance for J_body and b_hip, the
+// flight's horizontal momentum for c_d, the step between two footholds for the slope), estimated
+// by least squares with an outlier gate and a standard error, and a decision whether the model's
+// value is still inside the estimate's confidence region. No I/O; the plugin measures the hops
+// (HopReport::identification), this unit does the arithmetic. docs/hopper.md, "Identifying the
+// mass" and "Identifying the model terms".
 #ifndef DDOC_HOPPER_IDENTIFICATION_H_
 #define DDOC_HOPPER_IDENTIFICATION_H_
 
@@ -139,6 +139,15 @@ struct HopIdentificationData {
   /// tau_hip the commanded torque held over the step and the rates at its end (MuJoCo's implicit
   /// damping). A hip motor of strength g reads as J_body / g and b_hip / g.
   BlockRegression::Block hip;
+  /// The flight's horizontal momentum balance, the robot's momentum M xd + m_foot v_foot,x
+  /// changed only by the drag -c_d xd|xd| on the body (the leg's spring moves the 2 g foot against
+  /// the body, which the foot's momentum takes out): from the hop's start to its touchdown
+  /// x^-(T1), flight_dxd = the body's xd change (m/s), flight_foot_dp = m_foot times the foot's x
+  /// velocity change (N s; m_foot the robot's foot), flight_drag = sum xd|xd| h with the xd each
+  /// step's drag was applied at (m^2/s): -(M flight_dxd + flight_foot_dp) = c_d flight_drag.
+  double flight_dxd = kNaN;
+  double flight_foot_dp = kNaN;
+  double flight_drag = kNaN;
   /// The foot centre at the hop's start and at its end (the takeoffs that begin and end it:
   /// the footholds of the stance before and of its own), world frame, m. On the floor line y =
   /// x tan(slope) + c, dy = tan(slope) dx between them (both unloaded, as the foot leaves).
@@ -181,10 +190,11 @@ class MassIdentification {
   OriginRegression mass_;
 };
 
-/// The model terms b_leg, b_hip, J_body and slope (HopperParams) from the hops: b_leg from
+/// The model terms b_leg, b_hip, J_body, c_d and slope (HopperParams) from the hops: b_leg from
 /// leg_work - M leg_motion = b_leg leg_rate_sq (M: the mass estimate, MassIdentification),
-/// (J_body, b_hip) from the body's pitch balance (BlockRegression), tan(slope) from the step
-/// between consecutive footholds, dy = tan(slope) dx; each with its gate and standard error. A
+/// (J_body, b_hip) from the body's pitch balance (BlockRegression), c_d from the flight's
+/// momentum, -(M flight_dxd + flight_foot_dp) = c_d flight_drag, tan(slope) from the step between
+/// the footholds, dy = tan(slope) dx; each with its gate and standard error. A
 /// term leaves the model when |estimate - model's| > max(z se, its tolerance); the tolerances are
 /// the smallest differences worth a new u^0. The pitch balance reads the commanded torque, so a
 /// hip motor of strength g gives J_body / g: the identified model scales J_leg with J_body
@@ -195,15 +205,18 @@ class TermsIdentification {
   struct Settings {
     OriginRegression::Settings leg = DefaultLeg();      ///< y in J
     BlockRegression::Settings hip = DefaultHip();       ///< y in N m s
+    OriginRegression::Settings drag = DefaultDrag();    ///< y in N s
     OriginRegression::Settings slope = DefaultSlope();  ///< y in m (the footholds' height step)
     double z = 3.0;                   ///< default 3 (99.7 % for a normal error)
     double b_leg_tolerance = 0.1;     ///< N s/m, >= 0
     double b_hip_tolerance = 0.02;    ///< N m s/rad, >= 0
     double inertia_tolerance = 0.01;  ///< relative to the model's J_body, >= 0
+    double drag_tolerance = 0.005;    ///< kg/m, >= 0 (half the shipped robots' drag)
     double slope_tolerance = 0.001;   ///< rad, >= 0
 
     static OriginRegression::Settings DefaultLeg();
     static BlockRegression::Settings DefaultHip();
+    static OriginRegression::Settings DefaultDrag();
     static OriginRegression::Settings DefaultSlope();
   };
   /// One term's estimate: value (NaN before a sample), its standard error (infinite until
@@ -219,6 +232,7 @@ class TermsIdentification {
     Term b_leg;   ///< N s/m
     Term b_hip;   ///< N m s/rad
     Term j_body;  ///< kg m^2
+    Term c_d;     ///< kg/m
     Term slope;   ///< rad, HopperParams::slope's sign (> 0 rises towards +x)
   };
   /// The re-solved model's terms are the estimates rounded to these steps.
@@ -226,6 +240,7 @@ class TermsIdentification {
     double b_leg = 0.01;    ///< N s/m
     double b_hip = 0.001;   ///< N m s/rad
     double inertia = 1e-4;  ///< relative to the model's J_body
+    double c_d = 1e-4;      ///< kg/m
     double slope = 1e-4;    ///< rad
   };
 
@@ -242,21 +257,22 @@ class TermsIdentification {
   /// True when a determined term of `model` lies outside its estimate's confidence region.
   bool LeavesModel(const HopperParams& model) const;
   /// `model` with each term that leaves it set to its estimate rounded to `resolution` (J_leg
-  /// scaled as J_body), the dampers clamped at >= 0, the inertias at >= 1 % of the model's and
-  /// the slope inside the model's range; the other terms as in `model`.
+  /// scaled as J_body), the dampers and the drag clamped at >= 0, the inertias at >= 1 % of the
+  /// model's and the slope inside the model's range; the other terms as in `model`.
   HopperParams Identified(const HopperParams& model, const Resolution& resolution) const;
 
  private:
   Settings settings_;
-  OriginRegression leg_, slope_;
+  OriginRegression leg_, drag_, slope_;
   BlockRegression hip_;
 };
 
 /// The model u^0 should be solved again on, or nullopt when `model` is still inside the
 /// confidence regions of what is acted on: with act_on_mass, M = the mass estimate rounded to
-/// mass_resolution when it leaves (MassIdentification::LeavesModel); with act_on_terms, the terms
-/// that leave (TermsIdentification::Identified), decided only once every term is determined so
-/// that the first decision re-solves once for all of them.
+/// mass_resolution when it leaves (MassIdentification::LeavesModel); with act_on_terms, the
+/// determined terms that leave (TermsIdentification::Identified). Nothing is decided before the
+/// mass is determined (when acted on); a term determined later (the slope, after the first hop
+/// between two takeoffs) can make a second re-solve.
 std::optional<HopperParams> IdentifiedModel(const HopperParams& model,
                                             const MassIdentification& mass, bool act_on_mass,
                                             double mass_resolution,
