@@ -181,12 +181,22 @@ bool BlockRegression::Add(const Block& block) {
   return true;
 }
 
-OriginRegression::Settings TermsIdentification::Settings::DefaultLeg() {
+namespace {
+
+// A regression that decides after one sample, its spread floored at the measurement's
+// resolution `floor` (y's unit); the gate from the third sample.
+OriginRegression::Settings OneSampleRegression(double floor) {
   OriginRegression::Settings s;
   s.min_samples = 2;
   s.decide_after = 1;
-  s.absolute_floor = 5e-3;  // J
+  s.absolute_floor = floor;
   return s;
+}
+
+}  // namespace
+
+OriginRegression::Settings TermsIdentification::Settings::DefaultLeg() {
+  return OneSampleRegression(5e-3);  // J
 }
 
 BlockRegression::Settings TermsIdentification::Settings::DefaultHip() {
@@ -197,19 +207,11 @@ BlockRegression::Settings TermsIdentification::Settings::DefaultHip() {
 }
 
 OriginRegression::Settings TermsIdentification::Settings::DefaultDrag() {
-  OriginRegression::Settings s;
-  s.min_samples = 2;
-  s.decide_after = 1;
-  s.absolute_floor = 2e-5;  // N s
-  return s;
+  return OneSampleRegression(2e-5);  // N s
 }
 
 OriginRegression::Settings TermsIdentification::Settings::DefaultSlope() {
-  OriginRegression::Settings s;
-  s.min_samples = 2;
-  s.decide_after = 1;
-  s.absolute_floor = 5e-4;  // m
-  return s;
+  return OneSampleRegression(5e-4);  // m
 }
 
 TermsIdentification::TermsIdentification(const Settings& settings)

@@ -331,49 +331,38 @@ TEST(IdentificationTest, TheIdentifiedModelMovesWhatLeavesOnceTheMassIsKnown) {
   EXPECT_FALSE(IdentifiedModel(model, mass, false, 1e-3, terms, false, res)) << "nothing acted on";
 }
 
+// `make` throws InvalidArgument with `text` in its message.
+template <class F>
+void ExpectNamed(F make, const std::string& text) {
+  try {
+    make();
+    ADD_FAILURE() << "no exception; expected one naming " << text;
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
 TEST(IdentificationTest, BadSettingsAreNamed) {
   OriginRegression::Settings bad_gate;
   bad_gate.gate = 0;
-  EXPECT_THROW(
-      try { OriginRegression r(bad_gate); } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("gate = 0"), std::string::npos) << e.what();
-        throw;
-      },
-      InvalidArgument);
+  ExpectNamed([&] { OriginRegression r(bad_gate); }, "gate = 0");
   OriginRegression::Settings few;
   few.min_samples = 1;
-  EXPECT_THROW(OriginRegression r(few), InvalidArgument);
+  ExpectNamed([&] { OriginRegression r(few); }, "min_samples = 1, expected >= 2");
   OriginRegression::Settings no_floor;
   no_floor.decide_after = 1;
   no_floor.relative_floor = 0.0;
-  EXPECT_THROW(
-      try { OriginRegression r(no_floor); } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("decide_after = 1, expected >= 2, or 1 with a floor"),
-                  std::string::npos)
-            << e.what();
-        throw;
-      },
-      InvalidArgument);
+  ExpectNamed([&] { OriginRegression r(no_floor); },
+              "decide_after = 1, expected >= 2, or 1 with a floor");
   BlockRegression::Settings no_blocks;
   no_blocks.min_blocks = 0;
-  EXPECT_THROW(BlockRegression r(no_blocks), InvalidArgument);
+  ExpectNamed([&] { BlockRegression r(no_blocks); }, "min_blocks = 0, expected >= 1");
   TermsIdentification::Settings bad_tolerance;
   bad_tolerance.slope_tolerance = -1.0;
-  EXPECT_THROW(
-      try { TermsIdentification id(bad_tolerance); } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("slope_tolerance = -1"), std::string::npos)
-            << e.what();
-        throw;
-      },
-      InvalidArgument);
+  ExpectNamed([&] { TermsIdentification id(bad_tolerance); }, "slope_tolerance = -1");
   MassIdentification::Settings bad_z;
   bad_z.z = std::nan("");
-  EXPECT_THROW(
-      try { MassIdentification id(bad_z); } catch (const InvalidArgument& e) {
-        EXPECT_NE(std::string(e.what()).find("z = nan"), std::string::npos) << e.what();
-        throw;
-      },
-      InvalidArgument);
+  ExpectNamed([&] { MassIdentification id(bad_z); }, "z = nan");
 }
 
 }  // namespace
