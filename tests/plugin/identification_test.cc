@@ -40,6 +40,18 @@ ControllerConfig Identifying(Method method) {
   return config;
 }
 
+// The re-solves, for a failure message.
+std::string Describe(const std::vector<ModelResolve>& resolves) {
+  std::string out;
+  for (const ModelResolve& q : resolves) {
+    out += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
+           std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
+           std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
+           std::to_string(q.slope) + ")";
+  }
+  return out;
+}
+
 // The first hop with a flight after `due` (s): the hop in which a law due then takes over.
 int FirstFlightAfter(const std::vector<HopReport>& reports, double due) {
   for (const HopReport& h : reports) {
@@ -171,14 +183,7 @@ TEST(ControllerIdentificationTest, SynchronousLearningTakesOverAtTheTakeoff) {
   ASSERT_TRUE(rig.ok());
   const std::vector<HopReport> reports = RunHops(&rig, 8);
   ASSERT_EQ(reports.size(), 8u);
-  std::string resolves;
-  for (const ModelResolve& q : rig.c().resolves()) {
-    resolves += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
-                std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
-                std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
-                std::to_string(q.slope) + ")";
-  }
-  ASSERT_EQ(rig.c().resolves().size(), 1u) << resolves;
+  ASSERT_EQ(rig.c().resolves().size(), 1u) << Describe(rig.c().resolves());
   const ModelResolve& r = rig.c().resolves()[0];
   EXPECT_EQ(r.took_over_hop, r.hop + 1);
   // Hops took_over, took_over + 1 run u^0 (warm-up), took_over + 2 initializes; the learner's
@@ -222,17 +227,10 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   const double c_d = map.drag_cd / gain;
   const std::vector<HopReport> reports = RunHops(&rig, 8);
   ASSERT_EQ(reports.size(), 8u);
-  std::string resolves;
-  for (const ModelResolve& q : rig.c().resolves()) {
-    resolves += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
-                std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
-                std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
-                std::to_string(q.slope) + ")";
-  }
   // One re-solve; on the slope a second may refine its first pair's estimate (1.9 mrad off on
   // this robot, more than the 1 mrad tolerance).
   ASSERT_GE(rig.c().resolves().size(), 1u);
-  ASSERT_LE(rig.c().resolves().size(), slope != 0.0 ? 2u : 1u) << resolves;
+  ASSERT_LE(rig.c().resolves().size(), slope != 0.0 ? 2u : 1u) << Describe(rig.c().resolves());
   const ModelResolve& first = rig.c().resolves()[0];
   EXPECT_EQ(first.hop, slope != 0.0 ? 1 : 0);
   EXPECT_EQ(first.took_over_hop, first.hop + 1);
