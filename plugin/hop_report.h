@@ -46,6 +46,10 @@ struct HopReport {
   double identified_mass = std::numeric_limits<double>::quiet_NaN();
   /// The model's M when the hop ended, kg (changes only with ControllerConfig::identification).
   double model_mass = std::numeric_limits<double>::quiet_NaN();
+  /// TermsIdentification's estimates after this hop (NaN before their first sample; the
+  /// standard errors infinite until determined) and the model's terms when the hop ended.
+  TermsIdentification::Estimate identified_terms;
+  HopperParams model_params;
   // From the trial driver (TrialOutcome):
   bool accepted = false;        ///< (36) held (true for trials it does not judge)
   double learner_cost = 0.0;    ///< the measured cost the driver saw (EvaluateCost)
@@ -79,6 +83,12 @@ struct HopReport {
 struct ModelResolve {
   int hop = 0;            ///< the hop whose stance made the model leave the estimate's region
   double mass = 0.0;      ///< the new model's M, kg
+  double b_leg = 0.0;     ///< the new model's b_leg, N s/m
+  double b_hip = 0.0;     ///< the new model's b_hip, N m s/rad
+  double slope = 0.0;     ///< the new model's floor slope, rad
+  double j_body = 0.0;    ///< the new model's J_body, kg m^2
+  double j_leg = 0.0;     ///< the new model's J_leg, kg m^2
+  double c_d = 0.0;       ///< the new model's c_d, kg/m
   double wall_ms = 0.0;   ///< wall time of the re-solve (gait + u^0, or the law cache), ms
   int took_over_hop = -1; ///< the hop in which the new u^0 took over (-1: not yet)
   std::string law_cache;  ///< where the new u^0 came from (as law_cache_status())

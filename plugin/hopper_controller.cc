@@ -21,6 +21,13 @@ double ThreadCpuSeconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
+// The foot's x velocity in a flight-coordinate state: xd + d/dt(r sin theta).
+double FootVelocityX(const Eigen::Matrix<double, 14, 1>& xf) {
+  const double th = xf(hopper::kTheta);
+  return xf(hopper::kXd) + xf(hopper::kRd) * std::sin(th) +
+         xf(hopper::kR) * xf(hopper::kThetad) * std::cos(th);
+}
+
 // (x, y, xd, yd) of a flight-coordinate state.
 Eigen::Vector4d BodyState(const Eigen::Matrix<double, 14, 1>& xf) {
   return Eigen::Vector4d(xf(hopper::kX), xf(hopper::kY), xf(hopper::kXd), xf(hopper::kYd));
@@ -66,7 +73,15 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(id.resolve_latency >= 0.0) || !std::isfinite(id.resolve_latency)) {
     fail("identification.resolve_latency", id.resolve_latency, "finite and >= 0");
   }
+  const TermsIdentification::Resolution& res = id.term_resolution;
+  for (const auto& [name, value] : {std::pair{"b_leg", res.b_leg}, {"b_hip", res.b_hip},
+                                    {"inertia", res.inertia}, {"slope", res.slope}}) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      fail(std::string("identification.term_resolution.") + name, value, "finite and > 0");
+    }
+  }
   MassIdentification check(id.estimator);  // throws naming a bad estimator setting
+  TermsIdentification check_terms(id.terms_estimator);
 }
 
 ModelPlantSettings ModelPlantSettingsFor(const ControllerConfig& c) {
@@ -90,7 +105,6 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
                            ModelPlant* plant, HopperCost* cost, OnlineController* law,
                            NominalGait* gait) {
   InitialLaw out;
-  *gait = FindNominalGait(config.model, config.gait);
   std::string key, unusable;  // unusable: " (<file>: <why>)" when a stored law was not usable
   if (!config.law_cache.empty()) {
     key = InitialLawKey(config);
@@ -106,6 +120,9 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
     bool loaded = ReadInitialLaw(config.law_cache, key, &stored, &why);
     if (loaded) {
       try {
+        // The gait the solve started from, rebuilt from its search variables (the key holds
+        // every input of the search).
+        *gait = NominalGaitAt(config.model, config.gait, stored.gait_search);
         law->Allocate(problem, config.model_learner.max_samples, config.model_learner.controller);
         law->ImportLaw(stored.law);
       } catch (const InvalidArgument& e) {
@@ -126,6 +143,7 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
       out.trouble = true;
     }
   }
+  *gait = FindNominalGait(config.model, config.gait);
   Learner model_learner(problem, config.model_learner);
   const SolveResult solved = SolveFromGait(model_learner, *plant, cost, *gait);
   out.cost = solved.cost;
@@ -141,6 +159,7 @@ InitialLaw SolveInitialLaw(const ControllerConfig& config, const Problem& proble
   stored.model_cost = out.cost;
   stored.model_iterations = out.iterations;
   stored.cyclic_value = out.cyclic_value;
+  stored.gait_search = gait->search;
   std::string why;
   if (WriteInitialLaw(config.law_cache, key, stored, &why)) {
     out.status = "stored " + InitialLawPath(config.law_cache, key) + unusable;
@@ -199,6 +218,7 @@ void HopperController::Initialize() {
     return model_.Guard(k, x, u);
   });
   mass_id_ = MassIdentification(config_.identification.estimator);
+  terms_id_ = TermsIdentification(config_.identification.terms_estimator);
   // u^0, T^0: the model-based optimal feedback policy (OC-FB) from a nominal constant-input gait.
   const InitialLaw u0 =
       SolveInitialLaw(config_, problem_, &model_plant_, &cost_, &fallback_, &gait_);
@@ -232,11 +252,11 @@ void HopperController::MakeDriver(int warmup) {
   driver_->SeedCyclicValue(cyclic_value_);
 }
 
-void HopperController::ResolveModel(double mass) {
+void HopperController::ResolveModel(const HopperParams& params) {
   const auto start = std::chrono::steady_clock::now();
   // Objects of its own: the simulation side keeps using model_ and fallback_ meanwhile.
   ControllerConfig config = config_;
-  config.model.M = mass;
+  config.model = params;
   HopperModel model(config.model);
   HopperCost cost(model, config.cost_weights);
   const Problem problem = HopperProblem(model, cost, config.durations);
@@ -258,7 +278,13 @@ void HopperController::ResolveModel(double mass) {
   staged_.ready = true;
   staged_.record = ModelResolve();
   staged_.record.hop = job_hop_;
-  staged_.record.mass = mass;
+  staged_.record.mass = params.M;
+  staged_.record.b_leg = params.b_leg;
+  staged_.record.b_hip = params.b_hip;
+  staged_.record.slope = params.slope;
+  staged_.record.j_body = params.J_body;
+  staged_.record.j_leg = params.J_leg;
+  staged_.record.c_d = params.c_d;
   staged_.record.law_cache = u0.status;
   staged_.record.wall_ms =
       1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -300,7 +326,7 @@ void HopperController::Reset(const mjModel* m, mjData* d) {
   robot_data_ = d;
   // What identification learned stays (the same robot): a staged u^0 takes over now.
   if (staged_.ready) TakeOverResolvedModel();
-  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
+  resolve_request_.reset();
   driver_->Reset();
   waiting_.clear();
   reports_.clear();
@@ -383,6 +409,7 @@ void HopperController::Step(const mjData* d) {
   // The stiffness commands of the previous step were held over [last_time_, t].
   if (started_) vsa_.Advance(t - last_time_, u_(2), u_(3));
   const double step = started_ ? t - last_time_ : 0.0;
+  const double t_prev = last_time_;
   last_time_ = t;
 
   // Phase (ContactPhaseDetector), then the state, mapped once in the coordinates this step needs:
@@ -396,9 +423,15 @@ void HopperController::Step(const mjData* d) {
   }
   if (!flight) MapStanceState(map_, d, vsa_.state(), xs_.data());
   if (was_stance) AddStanceImpulse(d, step);
+  if (started_) AddBalances(d, was_stance, t_prev, step);
+  prev_phid_ = flight ? xf_(hopper::kPhid) : xs_(hopper::kSPhid);
+  prev_body_v_ << d->qvel[map_.dof_x], d->qvel[map_.dof_z];
   if (!started_) {
     started_ = true;
     BeginHop(t, xf_);
+    // A state placed by Reset or RestartHop, not a takeoff from the floor: no foothold (on a
+    // soft floor the feet of the takeoffs are sunk, the placed one is not).
+    balances_.start_foot_x = balances_.start_foot_y = HopIdentificationData::kNaN;
   }
   if (change == ContactChange::kTouchdown && substep && t > hist_t_[0]) {
     // x^-(T1) between the last flight step and this one, at the detector's instant.
@@ -413,6 +446,7 @@ void HopperController::Step(const mjData* d) {
     EndHop(t, xf_);
     BeginHop(t, xf_);
   }
+  if (flight && !flight_clear_) StartFlightBalance(d);
   if (job_.load(std::memory_order_acquire) == Job::kDone) TakeOfflineResult();
   DeployLawWhenDue(t);
 
@@ -484,6 +518,41 @@ void HopperController::AddStanceImpulse(const mjData* d, double h) {
   stance_impulse_ += (f_leg * std::cos(theta) + tangential * std::sin(theta)) * h;
 }
 
+void HopperController::AddBalances(const mjData* d, bool was_stance, double t_prev, double h) {
+  const bool flight = mode() == hopper::kFlight;
+  // The pitch balance: the damper acts on the step's end rate (MuJoCo's implicit damping).
+  const double phid = flight ? xf_(hopper::kPhid) : xs_(hopper::kSPhid);
+  const double thetad = flight ? xf_(hopper::kThetad) : xs_(hopper::kSThetad);
+  balances_.hip.Add(Eigen::Vector2d(phid - prev_phid_, (phid - thetad) * h),
+                    d->ctrl[map_.act_hip] * h);
+  // The flight's drag, at the body's rate when the step's drag was applied, over the steps from
+  // the first state whose foot is clear of the floor (StartFlightBalance) to the touchdown state
+  // (the touchdown step ends before the impact).
+  if (flight_clear_ && !was_stance) {
+    balances_.flight_drag += prev_body_v_(0) * std::abs(prev_body_v_(0)) * h;
+  }
+  // The radial balance over a step with both ends in stance, after the impact step.
+  if (flight || !was_stance || !(t_prev > touchdown_step_)) return;
+  const double theta = last_stance_(hopper::kSTheta);
+  const double rd0 = last_stance_(hopper::kSRd), rd1 = xs_(hopper::kSRd), wr = 0.5 * (rd0 + rd1);
+  const double g = -robot_model_->opt.gravity[2];
+  // The body's velocity change along the leg (foot to hip), (-sin theta, cos theta).
+  const double dv = (d->qvel[map_.dof_x] - prev_body_v_(0)) * -std::sin(theta) +
+                    (d->qvel[map_.dof_z] - prev_body_v_(1)) * std::cos(theta);
+  balances_.leg_work += d->ctrl[map_.act_leg] * wr * h;
+  balances_.leg_motion += (dv + g * std::cos(theta) * h) * wr;
+  balances_.leg_rate_sq += rd1 * wr * h;
+}
+
+void HopperController::StartFlightBalance(const mjData* d) {
+  // After the takeoff the foot can touch the floor for a step or two with a normal force below
+  // the detector's 0.5 N and a friction force up to 1000 times it; the balance starts at the
+  // first state without a foot-floor contact (the next step's solve has none).
+  if (FootTouchesFloor(map_, d, 0.0)) return;
+  flight_clear_ = true;
+  start_momentum_ << xf_(hopper::kXd), FootVelocityX(xf_);
+}
+
 void HopperController::Record(double t) {
   TrajectoryRecorder& rec = recorders_[recording_];
   const bool flight = mode() == hopper::kFlight;
@@ -522,6 +591,12 @@ void HopperController::BeginHop(double t, const FlightState14& x) {
   stance_pending_ = false;
   effort_ = 0.0;
   stance_impulse_ = 0.0;
+  balances_ = HopIdentificationData();
+  balances_.flight_drag = 0.0;
+  flight_clear_ = false;
+  balances_.start_foot_x = HopperModel::FootX(x);
+  balances_.start_foot_y = HopperModel::FootHeight(x);
+  balances_.leg_work = balances_.leg_motion = balances_.leg_rate_sq = 0.0;
 }
 
 void HopperController::Touchdown(double t, const FlightState14& x) {
@@ -536,6 +611,9 @@ void HopperController::Touchdown(double t, const FlightState14& x) {
   report_.body_touchdown = BodyState(x);
   report_.foot_height_td = HopperModel::FootHeight(x);
   foot_td_x_ = x(hopper::kX) + x(hopper::kR) * std::sin(x(hopper::kTheta));
+  balances_.flight_dxd = x(hopper::kXd) - start_momentum_(0);
+  balances_.flight_foot_dp =
+      robot_model_->body_mass[map_.body_foot] * (FootVelocityX(x) - start_momentum_(1));
   phase_start_ = t;
   stance_first_ = true;
   touchdown_step_ = last_time_;
@@ -565,6 +643,13 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   const double stance_time = t - r.t_touchdown;
   const double dyd =
       r.body_takeoff(3) - r.body_touchdown(3) - robot_model_->opt.gravity[2] * stance_time;
+  r.identification = balances_;
+  r.identification.end_foot_x = HopperModel::FootX(x);
+  r.identification.end_foot_y = HopperModel::FootHeight(x);
+  if (!(balances_.leg_rate_sq > 0.0)) {  // no step after the impact: no radial balance
+    r.identification.leg_work = r.identification.leg_motion = r.identification.leg_rate_sq =
+        HopIdentificationData::kNaN;
+  }
   if (stance_time > 0 && dyd > 0) {
     r.stance_mass = stance_impulse_ / dyd;
     r.identification.stance_impulse = stance_impulse_;
@@ -572,12 +657,17 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   }
   mass_id_.Add(r.identification);
   const MassIdentification::Estimate estimate = mass_id_.estimate();
+  terms_id_.Add(r.identification, estimate.mass);
+  const TermsIdentification::Estimate terms = terms_id_.estimate();
   r.identified_mass = estimate.mass;
   r.model_mass = model_.params().M;
-  const double resolution = config_.identification.mass_resolution;
-  if (config_.identification.mass && std::isnan(resolve_request_) && std::isnan(job_resolve_) &&
-      !staged_.ready && mass_id_.LeavesModel(r.model_mass)) {
-    resolve_request_ = std::max(resolution, std::round(estimate.mass / resolution) * resolution);
+  r.identified_terms = terms;
+  const HopperParams& model = model_.params();
+  r.model_params = model;
+  const IdentificationSettings& id = config_.identification;
+  if ((id.mass || id.terms) && !resolve_request_ && !job_resolve_ && !staged_.ready) {
+    resolve_request_ = IdentifiedModel(model, mass_id_, id.mass, id.mass_resolution, terms_id_,
+                                       id.terms, id.term_resolution);
   }
 
   // Hand the hop to the offline part, unless it is still busy with the previous one (worker
@@ -597,7 +687,7 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   job_hop_ = hop_;
   job_end_ = t;
   job_resolve_ = resolve_request_;  // the offline part re-solves u^0 after the trial
-  resolve_request_ = std::numeric_limits<double>::quiet_NaN();
+  resolve_request_.reset();
   ++hop_;
   job_.store(Job::kPosted, std::memory_order_release);
   if (Synchronous()) {
@@ -633,7 +723,7 @@ void HopperController::RunOffline() {
                                          : std::vector<Vector>());
     }
     next_law_ = learned != nullptr ? learned : &fallback_;
-    if (!std::isnan(job_resolve_)) ResolveModel(job_resolve_);
+    if (job_resolve_) ResolveModel(*job_resolve_);
     offline_error_.clear();
   } catch (const std::exception& e) {
     offline_error_ = std::string("offline part: ") + e.what();
@@ -662,12 +752,12 @@ void HopperController::TakeOfflineResult() {
                                         static_cast<double>(offline_steps_));
   }
   if (config_.measured_latency) latency = std::max(latency, offline_seconds_);
-  if (!std::isnan(job_resolve_) && staged_.ready) {  // this hop re-solved u^0: it takes over
+  if (job_resolve_ && staged_.ready) {  // this hop re-solved u^0: it takes over
     resolves_.push_back(staged_.record);
     if (!Synchronous()) law_pending_ = true;
     latency = std::max(latency, config_.identification.resolve_latency);
   }
-  job_resolve_ = std::numeric_limits<double>::quiet_NaN();
+  job_resolve_.reset();
   if (law_pending_) law_due_ = job_end_ + latency;
   for (Waiting& w : waiting_) {
     if (!w.needs_outcome) continue;

@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -43,28 +44,38 @@ struct PitchFeedbackExperiment {
   int from_hop = 10;   ///< first hop whose learned law is scaled, >= 0
 };
 
-/// Online identification of the model's mass (docs/hopper.md, "Identifying the mass"): every
-/// hop's stance feeds MassIdentification; when `mass` is on and the model's M leaves the
-/// estimate's confidence region, u^0 is solved again on the model with the estimated M (through
-/// the law cache), and every method goes on from it with a new driver. Off by default (the paper
-/// keeps the model fixed).
+/// Online identification of the model's mass and terms (docs/hopper.md, "Identifying the mass",
+/// "Identifying the model terms"): every hop feeds MassIdentification and TermsIdentification;
+/// when what is acted on (`mass`, `terms`) leaves the estimate's confidence region, u^0 is solved
+/// again on the model with the estimates (through the law cache), and every method goes on from
+/// it with a new driver. Off by default (the paper keeps the model fixed).
 struct IdentificationSettings {
-  bool mass = false;  ///< act on the estimate (re-solve u^0); false: estimate and report only
-  /// The estimate's gate and confidence; default min_samples 2 (a decision after two stances),
-  /// z 3, relative_tolerance 1 %.
+  bool mass = false;  ///< act on the mass estimate (re-solve u^0); false: estimate and report only
+  /// Act on the estimates of b_leg, b_hip, J_body (J_leg scaled with it), c_d and the floor
+  /// slope (HopperParams); default false.
+  bool terms = false;
+  TermsIdentification::Settings terms_estimator;  ///< their gates, confidence and tolerances
+  /// The re-solved model's terms are the estimates rounded to these.
+  TermsIdentification::Resolution term_resolution;
+  /// The estimate's gate and confidence; default a decision after one stance (decide_after 1,
+  /// its se from the relative floor 1e-3), the gate from the third (min_samples 2), z 3,
+  /// relative_tolerance 1 %.
   MassIdentification::Settings estimator = DefaultEstimator();
   double mass_resolution = 0.001;  ///< the re-solved model's M is the estimate rounded to this, kg
   /// Whole hops of the new u^0 before the new driver's "Initialize" hop (the hop in which the
   /// new law took over is not counted), >= 0; default 2.
   int settle_hops = 2;
   /// Simulated s from the identifying hop's end until the re-solved u^0 may take over (the
-  /// offline part solves the gait and u^0 meanwhile; with measured_latency at least its wall
-  /// time), >= 0; default 1 s (a law-cache load). ModelResolve::wall_ms says what this computer took.
-  double resolve_latency = 1.0;
+  /// offline part loads or solves the gait and u^0 meanwhile; with measured_latency at least its
+  /// wall time), >= 0; default 0.1 s: a law-cache load (about 6 ms here) with a margin, so that
+  /// the new u^0 takes over in the next flight. A cold solve takes 0.5-50 s instead;
+  /// ModelResolve::wall_ms says what this computer took.
+  double resolve_latency = 0.1;
 
   static MassIdentification::Settings DefaultEstimator() {
     MassIdentification::Settings s;
     s.regression.min_samples = 2;
+    s.regression.decide_after = 1;
     return s;
   }
 };
@@ -186,6 +197,8 @@ class HopperController {
   const std::string& law_cache_status() const { return law_cache_status_; }
   /// The stances' mass estimate (IdentificationSettings; kept whether or not it is acted on).
   const MassIdentification& mass_identification() const { return mass_id_; }
+  /// The hops' estimates of b_leg, b_hip and the slope (kept whether or not they are acted on).
+  const TermsIdentification& terms_identification() const { return terms_id_; }
   /// The re-solves of u^0 on an identified model, in order (empty when identification is off).
   const std::vector<ModelResolve>& resolves() const { return resolves_; }
   /// The model the laws are computed on now (config().model until a re-solve took over).
@@ -212,8 +225,8 @@ class HopperController {
   void Initialize();  // gait, u^0, driver; throws
   // A new driver of config_.driver on fallback_ (warm-up at least `warmup` trials).
   void MakeDriver(int warmup);
-  // Offline side: the gait and u^0 of the model with M = mass, into staged_ (law cache first).
-  void ResolveModel(double mass);
+  // Offline side: the gait and u^0 of the model `params`, into staged_ (law cache first).
+  void ResolveModel(const HopperParams& params);
   // Simulation side, in flight: the staged model, gait and u^0 take over; a new driver.
   void TakeOverResolvedModel();
   void PlaceAtTakeoff(const mjModel* m, mjData* d, const double* x, double t);
@@ -225,6 +238,11 @@ class HopperController {
   void TakeoffInsideStep(double t);
   // Adds the floor's vertical force over the last step [t - h, t] of a stance to stance_impulse_.
   void AddStanceImpulse(const mjData* d, double h);
+  // Adds the last step [t_prev, t_prev + h] to the hop's pitch balance and, for a stance step
+  // from the first post-impact state on (t_prev > the touchdown step), to its radial balance.
+  void AddBalances(const mjData* d, bool was_stance, double t_prev, double h);
+  // In flight: starts the flight's momentum balance at this state once the foot has no contact.
+  void StartFlightBalance(const mjData* d);
   // The hop ends at t; x: the flight state there (the next hop's start).
   void EndHop(double t, const FlightState14& x);
   void BeginHop(double t, const FlightState14& x);
@@ -259,8 +277,9 @@ class HopperController {
   // Identification: the estimate (simulation side), the model's mass asked for (NaN: none), the
   // re-solve the offline part staged, and the record.
   MassIdentification mass_id_;
-  double resolve_request_ = std::numeric_limits<double>::quiet_NaN();
-  double job_resolve_ = std::numeric_limits<double>::quiet_NaN();  // the job's request
+  TermsIdentification terms_id_;
+  std::optional<HopperParams> resolve_request_;
+  std::optional<HopperParams> job_resolve_;  // the job's request
   struct Staged {
     bool ready = false;  // the offline part solved it; it takes over when due, in flight
     HopperParams params;
@@ -310,6 +329,12 @@ class HopperController {
   FlightState14 x_touchdown_;
   double effort_ = 0.0;         // int 1/2 u'Ru dt over the hop
   double stance_impulse_ = 0.0;  // the floor's vertical impulse over the hop's stance, N s
+  HopIdentificationData balances_;  // the hop's radial and pitch sums (identification)
+  double prev_phid_ = 0.0;          // phid of the previous step (the pitch balance)
+  Eigen::Vector2d prev_body_v_ = Eigen::Vector2d::Zero();  // (xd, yd) of the previous step
+  // The flight balance's start (xd, the foot's x rate) and whether it has started (the foot clear).
+  Eigen::Vector2d start_momentum_ = Eigen::Vector2d::Zero();
+  bool flight_clear_ = false;
   double foot_td_x_ = 0.0, prev_foot_td_x_ = 0.0;
   bool have_prev_td_ = false;
 

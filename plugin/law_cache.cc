@@ -24,7 +24,7 @@ namespace ddoc::plugin {
 namespace {
 
 constexpr char kMagic[8] = {'D', 'D', 'O', 'C', 'L', 'A', 'W', '\n'};
-constexpr std::uint32_t kFormat = 2;  // 2: the cyclic value after the law
+constexpr std::uint32_t kFormat = 3;  // 2: the cyclic value after the law; 3: and the gait search
 
 // A field added to one of these structs must be added to InitialLawKey below (or stated there as
 // not read by the model solve); the sizes are those of x86-64 with libstdc++.
@@ -226,6 +226,7 @@ std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& 
   out += key;
   Put(&out, s.model_cost);
   Put(&out, static_cast<std::int32_t>(s.model_iterations));
+  PutArray(&out, s.gait_search.data(), s.gait_search.size());
   Put(&out, l.alpha);
   Put(&out, l.feedback_factor);
   const auto K = static_cast<std::int32_t>(l.samples.size());
@@ -270,7 +271,8 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   }
   std::int32_t iterations = 0, K = 0, n_max = 0, m = 0;
   OnlineControllerLaw& l = s->law;
-  if (!r.Get(&s->model_cost) || !r.Get(&iterations) || !r.Get(&l.alpha) ||
+  if (!r.Get(&s->model_cost) || !r.Get(&iterations) ||
+      !r.Array(s->gait_search.data(), s->gait_search.size()) || !r.Get(&l.alpha) ||
       !r.Get(&l.feedback_factor) || !r.Get(&K) || K < 1 || K > 64) {
     return fail("bad header");
   }
@@ -323,6 +325,7 @@ bool ParseInitialLaw(const std::string& data, const std::string& key, StoredInit
   if (!r.done()) return fail("trailing bytes");
   if (!s->cyclic_value.allFinite()) return fail("non-finite cyclic value");
   if (!std::isfinite(s->model_cost)) return fail("non-finite model cost");
+  if (!s->gait_search.allFinite()) return fail("non-finite gait search variables");
   return true;
 }
 

@@ -25,6 +25,9 @@ struct StoredInitialLaw {
   /// The model solve's cyclic value (BackwardPass::cyclic_value(), n_0 x n_0; empty: none),
   /// which the robot learner's first pass starts from.
   Matrix cyclic_value;
+  /// NominalGait::search of the gait the solve started from: NominalGaitAt rebuilds the gait
+  /// without its search (a load then takes milliseconds, not the search's 0.1 s).
+  Eigen::Matrix<double, 6, 1> gait_search = Eigen::Matrix<double, 6, 1>::Zero();
 };
 
 /// The text that identifies u^0: every ControllerConfig field the model solve reads (doubles as
@@ -42,7 +45,7 @@ bool ReadInitialLaw(const std::string& dir, const std::string& key, StoredInitia
                     std::string* why);
 
 /// The bytes of a law file stored for `key` (what WriteInitialLaw writes): a header, the key, the
-/// model cost and trials, the law's arrays, then LawFileChecksum of everything before it.
+/// model cost and trials, the gait's search variables, the law's arrays, then LawFileChecksum of everything before it.
 std::string SerializeInitialLaw(const std::string& key, const StoredInitialLaw& law);
 
 /// Parses the bytes of a law file stored for `key`. False with *why when they are not one

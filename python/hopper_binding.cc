@@ -237,10 +237,11 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    const py::object& offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
                    int height, double fps, const std::string& law_cache, bool substep_events,
-                   std::optional<bool> identify) {
+                   std::optional<bool> identify, std::optional<bool> identify_terms) {
   app::RunOverrides overrides;
   overrides.substep_events = substep_events;
   overrides.identify = identify;
+  overrides.identify_terms = identify_terms;
   overrides.method = method;
   overrides.hops = hops;
   overrides.seconds = seconds;
@@ -389,6 +390,12 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
     py::dict d;
     d["hop"] = r.hop;
     d["mass"] = r.mass;
+    d["b_leg"] = r.b_leg;
+    d["b_hip"] = r.b_hip;
+    d["slope"] = r.slope;
+    d["j_body"] = r.j_body;
+    d["j_leg"] = r.j_leg;
+    d["c_d"] = r.c_d;
     d["took_over_hop"] = r.took_over_hop;
     d["wall_ms"] = r.wall_ms;
     d["initial_law"] = r.law_cache;
@@ -441,6 +448,7 @@ class RunFailed(RuntimeError):
           py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
           py::arg("height") = 480, py::arg("fps") = 60.0, py::arg("law_cache") = "",
           py::arg("substep_events") = false, py::arg("identify") = py::none(),
+          py::arg("identify_terms") = py::none(),
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
 The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
@@ -464,6 +472,8 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   law_cache        directory of stored u^0 laws (--law-cache; "": $DDOC_LAW_CACHE, unset: off)
   substep_events   locate touchdown and takeoff inside the physics step (--substep-events)
   identify         True/False: identify the mass and re-solve u^0 on it (--identify/--no-identify)
+  identify_terms   True/False: identify b_leg, b_hip, J_body (J_leg with it), c_d and the floor
+                   slope and re-solve u^0 on them (--identify-terms/--no-identify-terms)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
@@ -473,8 +483,8 @@ offline_steps, offline_cpu_ms (the wall time of the hop's offline part, the simu
 law, the integration steps of its backward passes and its thread CPU time); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written), initial_law (where u^0 came from, as summary.json's
-initial_law) and resolves (the re-solves of u^0 on an identified mass: hop, mass, took_over_hop,
-wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
+initial_law) and resolves (the re-solves of u^0 on an identified model: hop, mass, b_leg, b_hip,
+slope, j_body, j_leg, c_d, took_over_hop, wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
 ddoc.SolveInterrupted with the partial result in .result; a controller failure or a non-finite
 MuJoCo state raises ddoc.RunFailed with it in .result; MuJoCo's warnings are RuntimeWarnings.)");

@@ -33,12 +33,20 @@ int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char*
 }
 
 std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
-                       double phase_time) {
+                       double phase_time, double floor_slope) {
   char buf[160];
   if (!x.allFinite()) return "the measured state is not finite";
-  if (x(hopper::kY) < lim.min_height) {
+  if (floor_slope == 0.0 && x(hopper::kY) < lim.min_height) {
     std::snprintf(buf, sizeof(buf), "body height %.3f m below %.2f m", x(hopper::kY),
                   lim.min_height);
+    return buf;
+  }
+  // On a sloped floor (the foot-centre line y = x tan(slope) through the origin) the height is
+  // the COM's above the floor under it: a robot hopping down hill has not fallen.
+  const double above_floor = x(hopper::kY) - x(hopper::kX) * std::tan(floor_slope);
+  if (floor_slope != 0.0 && above_floor < lim.min_height) {
+    std::snprintf(buf, sizeof(buf), "body height %.3f m above the floor below %.2f m",
+                  above_floor, lim.min_height);
     return buf;
   }
   if (std::abs(x(hopper::kPhi)) > lim.max_pitch) {
@@ -129,6 +137,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;
   if (s.substep_events) config.contact.substep_events = *s.substep_events;
   if (s.identify_mass) config.identification.mass = *s.identify_mass;
+  if (s.identify_terms) config.identification.terms = *s.identify_terms;
   if (s.settle_hops) config.identification.settle_hops = *s.settle_hops;
   if (s.resolve_latency) config.identification.resolve_latency = *s.resolve_latency;
   return config;
@@ -143,6 +152,12 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
       "--identify,!--no-identify", [this](std::int64_t count) { identify = count > 0; },
       "identify the robot's mass from the stances and re-solve u^0 on it when the model's "
       "leaves the estimate's confidence region (<identification mass>; overrides the scenario)");
+  cli->add_flag_function(
+      "--identify-terms,!--no-identify-terms",
+      [this](std::int64_t count) { identify_terms = count > 0; },
+      "identify the leg and hip damping and the floor slope from the hops and re-solve u^0 on "
+      "them when the model's leave the estimates' confidence regions (<identification terms>; "
+      "overrides the scenario)");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
   cli->add_flag("--substep-events", substep_events,
                 "locate touchdown and takeoff inside the physics step for the measured durations "
@@ -256,6 +271,7 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   }
   if (o.substep_events) s.substep_events = true;
   if (o.identify) s.identify_mass = *o.identify;
+  if (o.identify_terms) s.identify_terms = *o.identify_terms;
   if (o.no_pushes) {
     s.pushes.clear();
     s.hop_pushes.clear();
@@ -430,7 +446,8 @@ StepOutcome RunStepper::Step() {
     mode_ = c.mode();
     phase_start_ = d->time;
   }
-  const std::string fall = FallReason(limits_, x_, d->time - phase_start_);
+  const std::string fall =
+      FallReason(limits_, x_, d->time - phase_start_, c.mapping().floor_slope);
   if (!fall.empty()) return {StepOutcome::Kind::kFell, fall};
   return {};
 }

@@ -50,15 +50,17 @@ int RunTool(const char* tool, int (*run)(int argc, char** argv), int argc, char*
 
 /// Fall limits: the run ends with exit code 3 when one holds.
 struct FallLimits {
-  double min_height = 0.3;     ///< COM height y below this, m (the leg is 0.7 m long)
+  double min_height = 0.3;     ///< COM height above the floor below this, m (the leg is 0.7 m)
   double max_pitch = 1.0;      ///< |phi| above this, rad (57 deg)
   double max_leg_angle = 1.2;  ///< |theta| above this, rad (69 deg): the leg nearly horizontal
   double max_phase = 3.0;      ///< a flight or stance phase longer than this, s (stalled)
 };
 
-/// Returns a non-empty reason when the robot has fallen.
+/// Returns a non-empty reason when the robot has fallen. floor_slope (rad, HopperParams::slope's
+/// sign: > 0 rises in +x) is the robot's floor (HopperMapping::floor_slope): the COM height is
+/// then measured above the floor line y = x tan(floor_slope) under it.
 std::string FallReason(const FallLimits& lim, const Eigen::Matrix<double, 14, 1>& x,
-                       double phase_time);
+                       double phase_time, double floor_slope = 0.0);
 
 /// The analytic model of a scenario: its model MJCF (if any), then the numbers on top.
 HopperParams ModelParams(const Scenario& s);
@@ -87,6 +89,8 @@ struct RunOverrides {
   std::string preset;
   /// --identify / --no-identify: IdentificationSettings::mass (overrides the scenario and preset)
   std::optional<bool> identify;
+  /// --identify-terms / --no-identify-terms: IdentificationSettings::terms (overrides the scenario)
+  std::optional<bool> identify_terms;
   /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE (set
   /// and empty: off), then, when `user_law_cache`, DefaultLawCacheDir(), else off.
   std::string law_cache;

@@ -54,6 +54,8 @@ void Summary::AddHop(const plugin::HopReport& h, bool learns) {
   mean_period = period_sum_ / n;
   identified_mass = h.identified_mass;
   model_mass = h.model_mass;
+  identified_terms = h.identified_terms;
+  model_params = h.model_params;
   if (std::isfinite(h.stance_mass)) {
     stance_mass_sum_ += h.stance_mass;
     mean_stance_mass = stance_mass_sum_ / ++stance_mass_hops_;
@@ -210,11 +212,28 @@ void RunLog::WriteSummary(const Summary& s) {
   j["identification"] = {{"mass", s.identify_mass},
                          {"identified_mass", s.identified_mass},
                          {"model_mass", s.model_mass},
+                         {"terms", s.identify_terms},
                          {"resolves", nlohmann::json::array()}};
+  const TermsIdentification::Estimate& e = s.identified_terms;
+  const HopperParams& p = s.model_params;
+  for (const auto& [name, term, model] :  // value null: not measured yet; se null: not determined
+       {std::tuple{"b_leg", &e.b_leg, p.b_leg}, {"b_hip", &e.b_hip, p.b_hip},
+        {"j_body", &e.j_body, p.J_body}, {"c_d", &e.c_d, p.c_d}, {"slope", &e.slope, p.slope}}) {
+    j["identification"][std::string("identified_") + name] = {
+        {"value", term->value}, {"se", term->se}, {"hops", term->samples},
+        {"rejected", term->rejected}};
+    j["identification"][std::string("model_") + name] = model;
+  }
   for (const plugin::ModelResolve& r : s.resolves) {
     j["identification"]["resolves"].push_back(
         {{"hop", r.hop},
          {"mass", r.mass},
+         {"b_leg", r.b_leg},
+         {"b_hip", r.b_hip},
+         {"slope", r.slope},
+         {"j_body", r.j_body},
+         {"j_leg", r.j_leg},
+         {"c_d", r.c_d},
          {"took_over_hop", HopOrNull(r.took_over_hop)},
          {"wall_ms", r.wall_ms},
          {"initial_law", r.law_cache}});

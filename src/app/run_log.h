@@ -69,6 +69,11 @@ struct Summary {
   // estimate and model M (kg), and the re-solves of u^0 (HopperController::resolves()).
   bool identify_mass = false;
   double identified_mass = std::nan(""), model_mass = std::nan("");
+  // IdentificationSettings::terms, the last hop's estimates of the terms with their standard
+  // errors, and the model's terms (HopReport::identified_terms, model_params).
+  bool identify_terms = false;
+  TermsIdentification::Estimate identified_terms;
+  HopperParams model_params;
   std::vector<plugin::ModelResolve> resolves;
   double wall_time_s = 0.0;
   double sim_time_s = 0.0;

@@ -110,7 +110,9 @@ const std::vector<ElementSpec>& Elements() {
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"contact", false, {Text("substep_events")}},
-      {"identification", false, {Text("mass"), Integer("settle_hops", 0), Number("resolve_latency", kNonNegative)}},
+      {"identification", false,
+       {Text("mass"), Text("terms"), Integer("settle_hops", 0),
+        Number("resolve_latency", kNonNegative)}},
       {"gait", false,
        {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
         Number("k0_leg", Closed(lo(hopper::kK0leg), hi(hopper::kK0leg)))}},
@@ -356,6 +358,7 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
     if (auto v = GetChoice(path, e, "substep_events", "off", "on")) s->substep_events = *v == "on";
   } else if (tag == "identification") {
     if (auto v = GetChoice(path, e, "mass", "off", "on")) s->identify_mass = *v == "on";
+    if (auto v = GetChoice(path, e, "terms", "off", "on")) s->identify_terms = *v == "on";
     s->settle_hops = GetInteger(path, e, "settle_hops");
     s->resolve_latency = GetNumber(path, e, "resolve_latency");
   } else if (tag == "gait") {

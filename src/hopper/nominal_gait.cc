@@ -99,9 +99,8 @@ Vec6 Solve(const HopperModel& model, const HopperCostWeights& w, const NominalGa
   return p;
 }
 
-}  // namespace
-
-NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSettings& s) {
+// Throws InvalidArgument for params or settings no gait search accepts.
+void CheckGaitInputs(const HopperParams& params, const NominalGaitSettings& s) {
   params.Validate();
   if (s.dt > 0.0) params.CheckRk4Step(s.dt, "FindNominalGait");
   const Eigen::Vector4d lo = hopper::InputLowerBound();
@@ -116,16 +115,24 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
     throw InvalidArgument("FindNominalGait: need apex_height > r0 (" +
                           std::to_string(s.apex_height) + "), dt > 0, continuation_stages >= 1");
   }
-  // With the dampers or a slope (issue 44) no constant input is periodic: the dampers take energy
-  // out of every hop and the slope puts M g step tan(alpha) in. The search runs on the model
-  // without them (the paper's); its x0, u0 are then simulated on the full model below.
+}
+
+// With the dampers or a slope (issue 44) no constant input is periodic: the dampers take energy
+// out of every hop and the slope puts M g step tan(alpha) in. The search runs on the model
+// without them (the paper's); its x0, u0 are then simulated on the full model.
+HopperParams SearchParams(const HopperParams& params) {
   HopperParams search_params = params;
   search_params.b_leg = 0.0;
   search_params.b_hip = 0.0;
   search_params.slope = 0.0;
-  const bool has_terms = params.b_leg != 0.0 || params.b_hip != 0.0 || params.slope != 0.0;
-  const HopperModel model(search_params);
-  const HopperModel full_model(params);
+  return search_params;
+}
+
+}  // namespace
+
+NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSettings& s) {
+  CheckGaitInputs(params, s);
+  const HopperModel model(SearchParams(params));
   const HopperCostWeights w;
   // Start from vertical hopping in place (exactly periodic: theta = 0 gives v_f_theta = 0) and
   // ramp the forward speed, re-solving at each stage.
@@ -144,7 +151,21 @@ NominalGait FindNominalGait(const HopperParams& params, const NominalGaitSetting
     Residual(model, w, s, s.forward_speed, p, &hop);
     if (hop.ok && hop.apex > params.r0 + 0.25 * (s.apex_height - params.r0)) break;
   }
+  return NominalGaitAt(params, s, p);
+}
+
+NominalGait NominalGaitAt(const HopperParams& params, const NominalGaitSettings& s,
+                          const Eigen::Matrix<double, 6, 1>& p) {
+  CheckGaitInputs(params, s);
+  if (!p.allFinite()) throw InvalidArgument("NominalGaitAt: the search variables are not finite");
+  const Eigen::Vector4d lo = hopper::InputLowerBound();
+  const Eigen::Vector4d hi = hopper::InputUpperBound();
+  const bool has_terms = params.b_leg != 0.0 || params.b_hip != 0.0 || params.slope != 0.0;
+  const HopperModel model(SearchParams(params));
+  const HopperModel full_model(params);
+  const HopperCostWeights w;
   NominalGait g;
+  g.search = p;
   Assemble(params, s, s.forward_speed, p, &g.x0, &g.u0);
   // u0[0] = tau0 must respect the bounds; clamp (the search rarely leaves them).
   g.u0 = g.u0.cwiseMax(lo).cwiseMin(hi);

@@ -235,19 +235,26 @@ TEST_F(ScenarioTest, Identification) {
   const char* fmt = "<ddoc_scenario><robot mjcf='robot.xml'/><identification %s/></ddoc_scenario>";
   plugin::ControllerConfig c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
   EXPECT_FALSE(c.identification.mass);  // the default: off
+  EXPECT_FALSE(c.identification.terms);
   EXPECT_EQ(c.identification.settle_hops, 2);
-  EXPECT_EQ(c.identification.resolve_latency, 1.0);
+  EXPECT_EQ(c.identification.resolve_latency, 0.1);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "mass='on' settle_hops='0' resolve_latency='0.5'"))),
       HopperParams());
   EXPECT_TRUE(c.identification.mass);
+  EXPECT_FALSE(c.identification.terms);
   EXPECT_EQ(c.identification.settle_hops, 0);
   EXPECT_EQ(c.identification.resolve_latency, 0.5);
   ExpectError(Fill(fmt, "resolve_latency='-1'"), {"<identification>", "resolve_latency = -1"});
   ExpectError(Fill(fmt, "mass='yes'"), {"<identification>", "mass=\"yes\"", "off or on"});
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "terms='on'"))), HopperParams());
+  EXPECT_TRUE(c.identification.terms);
+  EXPECT_FALSE(c.identification.mass);
+  ExpectError(Fill(fmt, "terms='1'"), {"<identification>", "terms=\"1\"", "off or on"});
   ExpectError(Fill(fmt, "settle_hops='-1'"), {"<identification>", "settle_hops = -1", ">= 0"});
   ExpectError(Fill(fmt, "drag='on'"),
-              {"<identification>", "unknown attribute drag", "expected mass, settle_hops, resolve_latency"});
+              {"<identification>", "unknown attribute drag",
+               "expected mass, terms, settle_hops, resolve_latency"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 namespace ddoc {
@@ -36,6 +37,35 @@ TEST(NominalGaitTest, ForwardGaitIsPeriodicAndInRange) {
   EXPECT_TRUE((g.u0.array() >= hopper::InputLowerBound().array()).all());
   EXPECT_TRUE((g.u0.array() <= hopper::InputUpperBound().array()).all());
   EXPECT_NEAR(g.T0(1), g.period, 1e-12);
+}
+
+// NominalGaitAt rebuilds FindNominalGait's gait from its search variables bit for bit (the law
+// cache stores them instead of searching again), with and without the issue 44 terms.
+TEST(NominalGaitTest, TheSearchVariablesRebuildTheGaitExactly) {
+  NominalGaitSettings s;
+  s.forward_speed = 0.5;
+  HopperParams damped;
+  damped.M = 12.0;
+  damped.b_leg = 2.0;
+  damped.slope = -0.02;
+  for (const HopperParams& p : {HopperParams(), damped}) {
+    const NominalGait g = FindNominalGait(p, s);
+    const NominalGait at = NominalGaitAt(p, s, g.search);
+    EXPECT_TRUE(at.search == g.search);
+    EXPECT_TRUE(at.x0 == g.x0);
+    EXPECT_TRUE(at.u0 == g.u0);
+    EXPECT_TRUE(at.T0 == g.T0);
+    EXPECT_EQ(at.periodicity, g.periodicity);
+    EXPECT_EQ(at.energy_loss, g.energy_loss);
+    EXPECT_EQ(at.step_length, g.step_length);
+    // Other variables give another gait (the variables are what it is built from).
+    Eigen::Matrix<double, 6, 1> other = g.search;
+    other(2) += 1e-3;
+    EXPECT_FALSE(NominalGaitAt(p, s, other).x0 == g.x0);
+  }
+  Eigen::Matrix<double, 6, 1> bad = Eigen::Matrix<double, 6, 1>::Zero();
+  bad(1) = std::nan("");
+  EXPECT_THROW(NominalGaitAt(HopperParams(), s, bad), InvalidArgument);
 }
 
 TEST(NominalGaitTest, HeavyRobotStillHops) {

@@ -107,6 +107,30 @@ TEST_F(LawCacheTest, ALoadedLawRunsBitwiseLikeTheSolvedOne) {
   EXPECT_GT(stored.cyclic_value.norm(), 0.0);
 }
 
+// A loaded u^0 comes with the gait its solve started from, rebuilt from the search variables
+// stored beside it (NominalGaitAt) instead of searching again: the file's variables are the
+// loaded gait's.
+TEST_F(LawCacheTest, TheGaitIsRebuiltFromTheStoredSearch) {
+  Robot solved("hopper_m8.xml", Config(), false);
+  ASSERT_TRUE(solved.ok());
+  const NominalGait gait = solved.c().gait();
+  StoredInitialLaw law;
+  std::string why;
+  ASSERT_TRUE(ReadInitialLaw(dir_.string(), InitialLawKey(Config()), &law, &why)) << why;
+  EXPECT_TRUE(law.gait_search == gait.search);
+  // A file whose search variables are another (valid) gait's: the loaded controller runs that
+  // gait, so it did not search.
+  law.gait_search(2) += 1e-3;
+  ASSERT_TRUE(WriteInitialLaw(dir_.string(), InitialLawKey(Config()), law, &why)) << why;
+  Robot loaded("hopper_m8.xml", Config(), false);
+  ASSERT_TRUE(loaded.ok());
+  EXPECT_EQ(loaded.c().law_cache_status().rfind("loaded ", 0), 0u);
+  EXPECT_TRUE(loaded.c().gait().search == law.gait_search);
+  EXPECT_TRUE(loaded.c().gait().x0 ==
+              NominalGaitAt(Config().model, Config().gait, law.gait_search).x0);
+  EXPECT_FALSE(loaded.c().gait().x0 == gait.x0);
+}
+
 TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
   const ControllerConfig base = Config();
   const std::string key = InitialLawKey(base);
@@ -115,6 +139,8 @@ TEST_F(LawCacheTest, TheKeyHoldsEveryInputOfTheModelSolve) {
   std::vector<std::pair<const char*, void (*)(ControllerConfig*)>> changes = {
       {"model.M", [](ControllerConfig* c) { c->model.M = 10.0 + 1e-12; }},
       {"model.c_d", [](ControllerConfig* c) { c->model.c_d = 0.01; }},
+      {"model.J_body", [](ControllerConfig* c) { c->model.J_body = 3.0; }},
+      {"model.J_leg", [](ControllerConfig* c) { c->model.J_leg = 0.3; }},
       {"model.b_leg", [](ControllerConfig* c) { c->model.b_leg = 20.0; }},
       {"model.b_hip", [](ControllerConfig* c) { c->model.b_hip = 0.5; }},
       {"model.slope", [](ControllerConfig* c) { c->model.slope = -0.03; }},
@@ -218,7 +244,7 @@ StoredInitialLaw TinyLaw() {
 }
 
 TEST_F(LawCacheTest, TheModelSolvesCyclicValueIsStoredWithTheLaw) {
-  // Format 2: the cyclic value after the law, which the robot learner's first pass starts from;
+  // Since format 2: the cyclic value after the law, which the robot learner's first pass starts from;
   // a law without one (n_0 = 0) reads back as an empty matrix, a wrong size is named.
   StoredInitialLaw tiny = TinyLaw();
   for (const Matrix& P0 : {Matrix(Matrix::Constant(1, 1, 2.5)), Matrix()}) {

@@ -36,9 +36,13 @@ class Robot {
  public:
   /// The robot models/<mjcf> with a controller of `config` at 0.5 m/s, Reset. With exact_model
   /// the controller's model is read from the same MJCF. A failed Create fails the test.
-  Robot(const std::string& mjcf, ControllerConfig config, bool exact_model) {
+  /// `edit`, when given, changes the compiled mjModel before the controller is created (a
+  /// variant without a file, e.g. a weaker motor's gainprm).
+  Robot(const std::string& mjcf, ControllerConfig config, bool exact_model,
+        void (*edit)(mjModel*) = nullptr) {
     const std::string path = std::string(DDOC_MODELS_DIR) + "/" + mjcf;
     model_ = LoadMjcf(path);
+    if (edit != nullptr) edit(model_.get());
     data_.reset(mj_makeData(model_.get()));
     config.gait.forward_speed = 0.5;
     if (exact_model) config.model = LoadHopperParamsFromMjcf(path);

@@ -118,7 +118,7 @@ def test_run_hopper_substep_events():
 
 
 def test_run_hopper_identify():
-    # identify=True (--identify): u^0 is solved again on the 8 kg robot's mass after the second
+    # identify=True (--identify): u^0 is solved again on the 8 kg robot's mass after the first
     # stance; the model_mass column says from which hop on; identify=False is the plain run.
     kw = dict(method="ocfb", hops=8, log_every=0)
     plain = ddoc.run_hopper(SCENARIO, **kw)
@@ -128,12 +128,31 @@ def test_run_hopper_identify():
     assert plain["resolves"] == [] and off["resolves"] == []
     assert len(on["resolves"]) == 1
     r = on["resolves"][0]
-    assert r["hop"] <= 2 and abs(r["mass"] - 8.001) < 0.01
+    assert r["hop"] == 0 and abs(r["mass"] - 8.001) < 0.01
     took_over = r["took_over_hop"]
     assert 0 < took_over < 8
     np.testing.assert_array_equal(on["model_mass"][:took_over], 10.0)
     np.testing.assert_array_equal(on["model_mass"][took_over:], r["mass"])
     np.testing.assert_allclose(on["identified_mass"], 8.001, atol=0.01)
+
+
+def test_run_hopper_identify_terms():
+    # identify_terms=True (--identify-terms) on the 8 kg robot (c_d 0.01) with the 10 kg drag-free
+    # model: u^0 is re-solved on the drag after the first hop, the mass stays the model's (that
+    # is identify=True); no dampers, level floor, the body's inertia as the model's.
+    kw = dict(method="ocfb", hops=3, log_every=0)
+    plain = ddoc.run_hopper(SCENARIO, **kw)
+    off = ddoc.run_hopper(SCENARIO, identify_terms=False, **kw)
+    np.testing.assert_array_equal(plain["cost"], off["cost"])
+    assert off["resolves"] == []
+    on = ddoc.run_hopper(SCENARIO, identify_terms=True, **kw)
+    assert len(on["resolves"]) == 1
+    r = on["resolves"][0]
+    assert r["hop"] == 0 and abs(r["c_d"] - 0.01) < 2e-4 and r["mass"] == 10.0
+    assert r["b_leg"] == 0.0 and r["b_hip"] == 0.0 and r["slope"] == 0.0
+    assert r["j_body"] == 2.5
+    both = ddoc.run_hopper(SCENARIO, identify=True, identify_terms=True, **kw)
+    assert abs(both["resolves"][0]["mass"] - 8.001) < 0.01
 
 
 def test_run_hopper_log_every():

@@ -109,8 +109,16 @@ class GridTest(unittest.TestCase):
                 self.assertEqual([n for _, n, _ in both[:6]],
                                  [f"{stem}_{m}" for m in ("alg1", "ocfb", "mrl")] +
                                  [f"{stem}_id_{m}" for m in ("alg1", "ocfb", "mrl")])
-        self.assertEqual(rm.csv_columns("mass")[-1], "identification")
-        self.assertEqual(rm.csv_columns("push")[-2:], ("hops_to_recover", "identification"))
+        self.assertEqual(rm.csv_columns("mass")[-1 - len(rm.ID_COLUMNS)], "identification")
+        self.assertEqual(rm.csv_columns("push")[-2 - len(rm.ID_COLUMNS):-len(rm.ID_COLUMNS)],
+                         ("hops_to_recover", "identification"))
+        self.assertEqual(rm.csv_columns("unmodelled")[-len(rm.ID_COLUMNS):], rm.ID_COLUMNS)
+        # `terms` (--identify --identify-terms) is a third value, its cases end in _idt_<method>.
+        three = rm.cases(self.grid("--maps", "unmodelled", "--identification", "off,on,terms"))
+        stem = three[0][1][:-len("_alg1")]
+        self.assertEqual([n for _, n, _ in three[6:9]],
+                         [f"{stem}_idt_{m}" for m in ("alg1", "ocfb", "mrl")])
+        self.assertEqual(rm.IDENT_FLAGS["terms"], ["--identify", "--identify-terms"])
         self.assertEqual(rm.csv_columns("mass")[:5], ("case", "mass", "c_d", "speed", "method"))
 
     def test_negative_forces_need_no_equals_sign(self):
@@ -167,6 +175,32 @@ class SummaryTest(TempDirTest):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"mass_{method}.png")))
 
+    def test_identification_error_per_kind(self):
+        # The targets in the model's terms: a motor of strength g reads as M / g and J_body / g;
+        # a down-hill floor is a negative model slope.
+        self.assertEqual(rm.true_terms(8.0, "gain", 0.8),
+                         {"mass": 8.001 / 0.8, "b_leg": 0.0, "b_hip": 0.0, "j_body": 2.5 / 0.8,
+                          "c_d": 0.01 / 0.8, "slope": 0.0})
+        self.assertEqual(rm.true_terms(12.0, "slope_down", 0.02)["slope"], -0.02)
+        self.assertEqual(rm.true_terms(12.0, "b_leg", 3.0)["b_leg"], 3.0)
+        grid = rm.grid_from_args(rm.run_parser().parse_args(
+            ["--maps", "unmodelled", "--robots", "8", "--kinds", "b_leg,slope_down",
+             "--b-legs", "1,4", "--slopes", "0.01", "--identification", "terms"]))
+        estimates = {("b_leg", 1.0): (1.01, 0.0), ("b_leg", 4.0): (4.05, 0.0003),
+                     ("slope_down", 0.01): (0.02, -0.0102)}
+        rows = []
+        for _, name, keys in rm.cases(grid):
+            b_leg, slope = estimates[(keys["kind"], keys["level"])]
+            row = fake_row("unmodelled", name, keys["method"], 1.0, 0.1, 9, robot_mass="8",
+                           kind=keys["kind"], level=rm.dr.label(keys["level"]),
+                           identification="terms")
+            row.update(id_mass="8.002", id_b_leg=str(b_leg), id_b_hip="0", id_j_body="2.5",
+                       id_c_d="0.0101", id_slope=str(slope))
+            rows.append(row)
+        text = "\n".join(rm.identification_errors(grid, rows))
+        self.assertIn("| 8 | b_leg | 0.001 | 0.05 | 0 | 0 | 0.0001 | 0.0003 |", text)
+        self.assertIn("| 8 | slope_down | 0.001 | 0.02 | 0 | 0 | 0.0001 | 0.0002 |", text)
+
     def test_unmodelled_counts(self):
         # 8 kg robot, kinds b_leg (levels 1, 4) and gain (0.9): alg1 survives all three, ocfb
         # all but b_leg 4, mrl none. Both survive: b_leg 1 (2.0 / 2.5 = 0.8) and gain 0.9
@@ -209,8 +243,9 @@ class SummaryTest(TempDirTest):
                               cost_last10="1.0", cost_last10_sd="0.1", identification="off")
         rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
         path = os.path.join(self.tmp, "mass_map.csv")
+        cut = 1 + len(rm.ID_COLUMNS)  # the identification column and its estimates
         with open(path) as f:
-            old = [line.rsplit(",", 1)[0] for line in f.read().splitlines()]
+            old = [",".join(line.split(",")[:-cut]) for line in f.read().splitlines()]
         self.assertEqual(old[0].split(",")[-1], "stance_mass")
         with open(path, "w") as f:
             f.write("\n".join(old) + "\n")
@@ -297,10 +332,10 @@ class ShardMergeTest(TempDirTest):
         self.assertIn("hops", r.stderr)
 
     def test_merge_of_shards_is_the_unsharded_unmodelled_map(self):
-        # The unmodelled map with identification off and on: 1 robot x 2 conditions x 2 x 3 = 12
-        # cases; --robot-variant and --identify reach ddoc-hopper.
+        # The unmodelled map with identification off, on and terms: 1 robot x 2 conditions x 3 x
+        # 3 = 18 cases; --robot-variant, --identify and --identify-terms reach ddoc-hopper.
         tiny = ["--maps", "unmodelled", "--hops", "3", "--robots", "8", "--kinds", "b_leg,slope_up",
-                "--b-legs", "2", "--slopes", "0.01", "--identification", "off,on",
+                "--b-legs", "2", "--slopes", "0.01", "--identification", "off,on,terms",
                 "--hopper", FAKE, "--jobs", "2"]
         whole = os.path.join(self.tmp, "whole")
         r = run_tool("robustness_map", *tiny, "--out", whole)
@@ -319,9 +354,10 @@ class ShardMergeTest(TempDirTest):
         self.assertEqual([(r["case"], r["identification"]) for r in rows[2:5]],
                          [("unmod_m8_b_leg2_mrl", "off"), ("unmod_m8_b_leg2_id_alg1", "on"),
                           ("unmod_m8_b_leg2_id_ocfb", "on")])
-        self.assertEqual(list(rows[0])[-1], "identification")
+        self.assertEqual(list(rows[0])[-1 - len(rm.ID_COLUMNS)], "identification")
         argv = {}
-        for case in ("unmod_m8_b_leg2_alg1", "unmod_m8_slope_up0.01_id_mrl"):
+        for case in ("unmod_m8_b_leg2_alg1", "unmod_m8_slope_up0.01_id_mrl",
+                     "unmod_m8_slope_up0.01_idt_ocfb"):
             with open(os.path.join(whole, "runs", case, "argv.txt")) as f:
                 argv[case] = f.read().split("\n")
         self.assertIn("--robot-variant", argv["unmod_m8_b_leg2_alg1"])
@@ -330,15 +366,20 @@ class ShardMergeTest(TempDirTest):
         self.assertNotIn("--identify", argv["unmod_m8_b_leg2_alg1"])
         self.assertIn("--identify", argv["unmod_m8_slope_up0.01_id_mrl"])
         self.assertIn("slope=-0.01", argv["unmod_m8_slope_up0.01_id_mrl"])
+        self.assertNotIn("--identify-terms", argv["unmod_m8_slope_up0.01_id_mrl"])
+        for flag in ("--identify", "--identify-terms"):
+            self.assertIn(flag, argv["unmod_m8_slope_up0.01_idt_ocfb"])
         with open(os.path.join(whole, "scenarios", "unmod_m8_b_leg2_alg1.xml")) as f:
             self.assertIn("models/hopper_m8.xml", f.read())
-        for png in ("unmodelled_ocfb.png", "unmodelled_mrl_id.png"):
+        for png in ("unmodelled_ocfb.png", "unmodelled_mrl_id.png", "unmodelled_alg1_idt.png"):
             self.assertTrue(filecmp.cmp(os.path.join(merged, "heatmaps", png),
                                         os.path.join(whole, "heatmaps", png), shallow=False), png)
         with open(os.path.join(whole, "summary.md")) as f:
             text = f.read()
         self.assertIn("(2 in all), identification off", text)
         self.assertIn("(2 in all), identification on", text)
+        self.assertIn("(2 in all), identification and the model terms", text)
+        self.assertIn("Identification error", text)
 
     def test_slurm_array_task_runs_its_slice(self):
         base = os.path.join(self.tmp, "base")

@@ -38,6 +38,9 @@ struct NominalGait {
   double forward_speed = 0.0; ///< xd at takeoff, m/s
   double step_length = 0.0;   ///< horizontal COM travel over the hop, m
   double energy_loss = 0.0;   ///< Delta E at touchdown (41), J
+  /// The search variables [theta0, phi0, yd0, thetad0, phid0, tau0] the gait is built from
+  /// (NominalGaitAt rebuilds the same gait from them).
+  Eigen::Matrix<double, 6, 1> search = Eigen::Matrix<double, 6, 1>::Zero();
 };
 
 /// Shooting search (Levenberg-Marquardt, finite-difference Jacobian) over
@@ -56,6 +59,13 @@ struct NominalGait {
 /// I1 > max_periodicity: no periodic gait at that speed (e.g. 2.7 m/s and more on the 10 kg model).
 NominalGait FindNominalGait(const HopperParams& params,
                             const NominalGaitSettings& settings = NominalGaitSettings());
+
+/// The gait FindNominalGait(params, settings) returns when its search ends at `search`
+/// (NominalGait::search), bit for bit, without the search: one or two simulated hops instead of
+/// the continuation (about 100 ms). The law cache stores `search` beside u^0. Throws as
+/// FindNominalGait.
+NominalGait NominalGaitAt(const HopperParams& params, const NominalGaitSettings& settings,
+                          const Eigen::Matrix<double, 6, 1>& search);
 
 }  // namespace ddoc
 
