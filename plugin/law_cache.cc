@@ -188,6 +188,7 @@ void Put(std::string* out, const T& v) {
   out->append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 void PutArray(std::string* out, const double* v, Eigen::Index n) {
+  if (n == 0) return;  // v may be null
   out->append(reinterpret_cast<const char*>(v), static_cast<std::size_t>(n) * sizeof(double));
 }
 
@@ -203,6 +204,7 @@ class Reader {
   }
   bool Raw(void* dst, std::size_t n) {
     if (n > end_ - pos_) return false;
+    if (n == 0) return true;  // an empty array's data() may be null: no memcpy
     std::memcpy(dst, data_.data() + pos_, n);
     pos_ += n;
     return true;
