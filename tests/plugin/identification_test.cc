@@ -213,8 +213,8 @@ void WeakerMotors(mjModel* m) {
 // hip damper of 0.5 N m s/rad, a floor 2 deg down hill, or motors at 80 %; no drag): after the
 // first hop (the slope: the second, the first between two takeoffs) the 10 kg paper's model
 // leaves the estimates, u^0 is solved again once on the identified terms (each within its
-// tolerance of the robot's; the others as they were) and takes over in the next flight; after
-// 8 hops every estimate is within 1 % (slope: 0.5 mrad, drag 1e-4 kg/m) of the robot's.
+// tolerance of the robot's, the slope within 1.5 mrad; the others as they were) and takes over
+// in the next flight; after 8 hops every estimate is within 1 % (slope: 0.5 mrad, drag 1e-4 kg/m) of the robot's.
 void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double gain) {
   Robot rig(mjcf, IdentifyingTerms(Method::kOcfb), false, edit);
   ASSERT_TRUE(rig.ok());
@@ -227,8 +227,8 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   const double c_d = map.drag_cd / gain;
   const std::vector<HopReport> reports = RunHops(&rig, 8);
   ASSERT_EQ(reports.size(), 8u);
-  // One re-solve; on the slope a second may refine its first pair's estimate (1.9 mrad off on
-  // this robot, more than the 1 mrad tolerance).
+  // One re-solve; on the slope a second may refine its first pair's estimate (1.5-1.9 mrad off
+  // on this robot, depending on the hops the learner ran).
   ASSERT_GE(rig.c().resolves().size(), 1u);
   ASSERT_LE(rig.c().resolves().size(), slope != 0.0 ? 2u : 1u) << Describe(rig.c().resolves());
   const ModelResolve& first = rig.c().resolves()[0];
@@ -241,7 +241,11 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   EXPECT_NEAR(r.b_hip, b_hip, tol.b_hip_tolerance);
   EXPECT_NEAR(r.j_body, j_body, tol.inertia_tolerance * j_body);
   EXPECT_NEAR(r.j_leg / r.j_body, 0.25 / 2.5, 1e-12);
-  EXPECT_NEAR(r.slope, slope, tol.slope_tolerance);
+  // The slope's re-solve is refined only while the estimate leaves the model by more than the
+  // tolerance: the model's slope is within the tolerance of the final estimate (itself within
+  // 0.5 mrad of the robot's, below), so within 1.5 mrad of the robot's.
+  EXPECT_NEAR(r.slope, slope, tol.slope_tolerance + 5e-4);
+  EXPECT_FALSE(rig.c().terms_identification().LeavesModel(rig.c().model_params()));
   EXPECT_NEAR(r.c_d, c_d, tol.drag_tolerance);
   const HopperParams& p = rig.c().model_params();
   EXPECT_EQ(p.b_leg, r.b_leg);
