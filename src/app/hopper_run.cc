@@ -191,7 +191,7 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
       "match, else solve and store it (default: $DDOC_LAW_CACHE, set and empty: off; unset: "
       "$XDG_CACHE_HOME/ddoc or ~/.cache/ddoc)");
   cli->add_flag("--no-law-cache", no_law_cache,
-                "always solve u^0 on the model (about 11 s); nothing is read or stored")
+                "always solve u^0 on the model (about 1 s); nothing is read or stored")
       ->excludes(dir);
   if (!full) return;
   cli->add_option("--hops", hops, "number of hops (overrides the scenario)");

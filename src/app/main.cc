@@ -419,7 +419,7 @@ int HopperRun::Finish(int exit_code) {
 }
 
 // Starts the controller (StartController: the nominal gait and, without a stored law, the u^0
-// solve on the model, about 11 s) on a thread while this thread shows the elapsed time on a
+// solve on the model, about 1 s cold) on a thread while this thread shows the elapsed time on a
 // terminal and checks for SIGINT/SIGTERM every 50 ms. Returns false when a signal came first: the
 // start is abandoned and the thread left running (the caller ends the process with _Exit).
 // Rethrows what StartController threw.
