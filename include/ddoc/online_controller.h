@@ -170,7 +170,6 @@ class OnlineController : public Policy {
   Matrix H_;       // m x m
   Vector lo_, hi_; // m
   Vector du_;      // m
-  Matrix gain_;    // m x n_max: BlendStateFeedback's H_law^{-1} G_law
   // Content revision: a number no other state of any controller had, new at every change of the
   // law (Allocate, Load, ImportLaw, BlendStateFeedback); copies share it with their content.
   std::uint64_t revision_ = 0;

@@ -75,7 +75,6 @@ void OnlineController::Allocate(const Problem& problem, int max_samples,
   lo_.setZero(m_);
   hi_.setZero(m_);
   du_.setZero(m_);
-  gain_.setZero(m_, n_max_);
   llt_ = Eigen::LLT<Matrix>(m_);
   blend_g_.resize(static_cast<Eigen::Index>(m_) * n_max_, 0);  // sized by the first blend
   blend_ok_.clear();
@@ -305,15 +304,14 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
       const double a = law.Interval(k, tau, &j);
       const int s0 = law.layout_.index(k, j), s1 = s0 + 1;
       law.InterpolateHessian(s0, s1, a, &H_);
-      auto g = gain_.leftCols(n);
+      Eigen::Map<Matrix> g(blend_g_.col(s).data(), m_, n);  // G_law, then H_law^{-1} G_law
       g = ((1.0 - a) * law.feedback_factor_) *
               Eigen::Map<const Matrix>(law.Kx_.col(s0).data(), m_, n) +
           (a * law.feedback_factor_) * Eigen::Map<const Matrix>(law.Kx_.col(s1).data(), m_, n);
       llt_.compute(H_);
       blend_ok_[s] = llt_.info() == Eigen::Success;  // else no feedback to take: keep this law's
       if (!blend_ok_[s]) continue;
-      llt_.solveInPlace(g);  // H_law^{-1} G_law
-      Eigen::Map<Matrix>(blend_g_.col(s).data(), m_, n) = g;
+      llt_.solveInPlace(g);
     }
   }
   if (!reuse) {
@@ -327,8 +325,7 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
     for (int i = 0; i < layout_.count(k); ++i) {
       const int s = layout_.index(k, i);
       if (!blend_ok_[s]) continue;
-      auto g = gain_.leftCols(n);
-      g = Eigen::Map<const Matrix>(blend_g_.col(s).data(), m_, n);
+      const Eigen::Map<const Matrix> g(blend_g_.col(s).data(), m_, n);  // H_law^{-1} G_law
       Eigen::Map<Matrix> K(Kx_.col(s).data(), m_, n);
       K *= w;
       K.noalias() += ((1.0 - w) / feedback_factor_) *
