@@ -4,8 +4,10 @@
 #ifndef DDOC_PLUGIN_HOP_REPORT_H_
 #define DDOC_PLUGIN_HOP_REPORT_H_
 
+#include <array>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -82,17 +84,24 @@ struct HopReport {
 /// One re-solve of u^0 on an identified model (IdentificationSettings).
 struct ModelResolve {
   int hop = 0;            ///< the hop whose stance made the model leave the estimate's region
-  double mass = 0.0;      ///< the new model's M, kg
-  double b_leg = 0.0;     ///< the new model's b_leg, N s/m
-  double b_hip = 0.0;     ///< the new model's b_hip, N m s/rad
-  double slope = 0.0;     ///< the new model's floor slope, rad
-  double j_body = 0.0;    ///< the new model's J_body, kg m^2
-  double j_leg = 0.0;     ///< the new model's J_leg, kg m^2
-  double c_d = 0.0;       ///< the new model's c_d, kg/m
+  HopperParams model;     ///< the new model (ResolvedTerms: what identification may change)
   double wall_ms = 0.0;   ///< wall time of the re-solve (gait + u^0, or the law cache), ms
   int took_over_hop = -1; ///< the hop in which the new u^0 took over (-1: not yet)
   std::string law_cache;  ///< where the new u^0 came from (as law_cache_status())
 };
+
+/// The terms of a model that identification may change, named as in summary.json's
+/// identification.resolves and Python's run_hopper()["resolves"]: mass (M), b_leg, b_hip, slope,
+/// j_body, j_leg, c_d.
+inline std::array<std::pair<const char*, double>, 7> ResolvedTerms(const HopperParams& p) {
+  return {{{"mass", p.M},
+           {"b_leg", p.b_leg},
+           {"b_hip", p.b_hip},
+           {"slope", p.slope},
+           {"j_body", p.J_body},
+           {"j_leg", p.J_leg},
+           {"c_d", p.c_d}}};
+}
 
 }  // namespace ddoc::plugin
 

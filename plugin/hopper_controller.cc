@@ -278,13 +278,7 @@ void HopperController::ResolveModel(const HopperParams& params) {
   staged_.ready = true;
   staged_.record = ModelResolve();
   staged_.record.hop = job_hop_;
-  staged_.record.mass = params.M;
-  staged_.record.b_leg = params.b_leg;
-  staged_.record.b_hip = params.b_hip;
-  staged_.record.slope = params.slope;
-  staged_.record.j_body = params.J_body;
-  staged_.record.j_leg = params.J_leg;
-  staged_.record.c_d = params.c_d;
+  staged_.record.model = params;
   staged_.record.law_cache = u0.status;
   staged_.record.wall_ms =
       1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -389,13 +389,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
   for (const plugin::ModelResolve& r : run.controller->resolves()) {
     py::dict d;
     d["hop"] = r.hop;
-    d["mass"] = r.mass;
-    d["b_leg"] = r.b_leg;
-    d["b_hip"] = r.b_hip;
-    d["slope"] = r.slope;
-    d["j_body"] = r.j_body;
-    d["j_leg"] = r.j_leg;
-    d["c_d"] = r.c_d;
+    for (const auto& [name, value] : plugin::ResolvedTerms(r.model)) d[name] = value;
     d["took_over_hop"] = r.took_over_hop;
     d["wall_ms"] = r.wall_ms;
     d["initial_law"] = r.law_cache;

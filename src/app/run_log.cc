@@ -225,18 +225,12 @@ void RunLog::WriteSummary(const Summary& s) {
     j["identification"][std::string("model_") + name] = model;
   }
   for (const plugin::ModelResolve& r : s.resolves) {
-    j["identification"]["resolves"].push_back(
-        {{"hop", r.hop},
-         {"mass", r.mass},
-         {"b_leg", r.b_leg},
-         {"b_hip", r.b_hip},
-         {"slope", r.slope},
-         {"j_body", r.j_body},
-         {"j_leg", r.j_leg},
-         {"c_d", r.c_d},
-         {"took_over_hop", HopOrNull(r.took_over_hop)},
-         {"wall_ms", r.wall_ms},
-         {"initial_law", r.law_cache}});
+    nlohmann::ordered_json resolve = {{"hop", r.hop}};
+    for (const auto& [name, value] : plugin::ResolvedTerms(r.model)) resolve[name] = value;
+    resolve["took_over_hop"] = HopOrNull(r.took_over_hop);
+    resolve["wall_ms"] = r.wall_ms;
+    resolve["initial_law"] = r.law_cache;
+    j["identification"]["resolves"].push_back(resolve);
   }
   j["accepted"] = s.accepted;
   j["restarts"] = s.restarts;

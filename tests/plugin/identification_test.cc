@@ -44,10 +44,11 @@ ControllerConfig Identifying(Method method) {
 std::string Describe(const std::vector<ModelResolve>& resolves) {
   std::string out;
   for (const ModelResolve& q : resolves) {
-    out += " (hop " + std::to_string(q.hop) + ": M " + std::to_string(q.mass) + ", b_leg " +
-           std::to_string(q.b_leg) + ", b_hip " + std::to_string(q.b_hip) + ", J_body " +
-           std::to_string(q.j_body) + ", c_d " + std::to_string(q.c_d) + ", slope " +
-           std::to_string(q.slope) + ")";
+    out += " (hop " + std::to_string(q.hop) + ":";
+    for (const auto& [name, value] : ResolvedTerms(q.model)) {
+      out += std::string(" ") + name + " " + std::to_string(value);
+    }
+    out += ")";
   }
   return out;
 }
@@ -75,13 +76,13 @@ TEST(ControllerIdentificationTest, TheModelsMassIsReSolvedOnceOnTheRobots) {
     ASSERT_EQ(rig.c().resolves().size(), 1u);
     const ModelResolve& r = rig.c().resolves()[0];
     EXPECT_EQ(r.hop, 0) << "identified after the first stance";
-    EXPECT_NEAR(r.mass, sprung, 0.01 * sprung);
+    EXPECT_NEAR(r.model.M, sprung, 0.01 * sprung);
     const double due = reports[r.hop].t_end + rig.c().config().identification.resolve_latency;
     EXPECT_EQ(r.took_over_hop, FirstFlightAfter(reports, due));
     EXPECT_EQ(r.took_over_hop, r.hop + 1) << "0.1 s: in the next flight";
-    EXPECT_EQ(rig.c().model_params().M, r.mass);
+    EXPECT_EQ(rig.c().model_params().M, r.model.M);
     for (const HopReport& h : reports) {
-      EXPECT_EQ(h.model_mass, h.hop < r.took_over_hop ? 10.0 : r.mass) << "hop " << h.hop;
+      EXPECT_EQ(h.model_mass, h.hop < r.took_over_hop ? 10.0 : r.model.M) << "hop " << h.hop;
       EXPECT_NEAR(h.identified_mass, sprung, 0.01 * sprung) << "hop " << h.hop;
     }
     // The reports' (42) stays on the configured model: its I3 uses M = 10 kg before and after.
@@ -156,8 +157,8 @@ ThreeRuns ExpectDeterministic(const char* mjcf, const ControllerConfig& config,
   for (Robot* r : {t.b.get(), t.c.get()}) {
     EXPECT_EQ(r->c().resolves().size(), 1u);
     if (r->c().resolves().empty()) continue;
-    EXPECT_EQ(r->c().resolves()[0].mass, first.mass);
-    EXPECT_EQ(r->c().resolves()[0].b_leg, first.b_leg);
+    EXPECT_EQ(r->c().resolves()[0].model.M, first.model.M);
+    EXPECT_EQ(r->c().resolves()[0].model.b_leg, first.model.b_leg);
     EXPECT_EQ(r->c().resolves()[0].took_over_hop, first.took_over_hop);
   }
   for (size_t i = 0; i < std::min({ra.size(), rb.size(), rc.size()}); ++i) {
@@ -234,22 +235,22 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   const ModelResolve& first = rig.c().resolves()[0];
   EXPECT_EQ(first.hop, slope != 0.0 ? 1 : 0);
   EXPECT_EQ(first.took_over_hop, first.hop + 1);
-  EXPECT_NEAR(first.slope, slope, 3e-3);
+  EXPECT_NEAR(first.model.slope, slope, 3e-3);
   const ModelResolve& r = rig.c().resolves().back();
   const TermsIdentification::Settings tol;
-  EXPECT_NEAR(r.b_leg, b_leg, tol.b_leg_tolerance);
-  EXPECT_NEAR(r.b_hip, b_hip, tol.b_hip_tolerance);
-  EXPECT_NEAR(r.j_body, j_body, tol.inertia_tolerance * j_body);
-  EXPECT_NEAR(r.j_leg / r.j_body, 0.25 / 2.5, 1e-12);
+  EXPECT_NEAR(r.model.b_leg, b_leg, tol.b_leg_tolerance);
+  EXPECT_NEAR(r.model.b_hip, b_hip, tol.b_hip_tolerance);
+  EXPECT_NEAR(r.model.J_body, j_body, tol.inertia_tolerance * j_body);
+  EXPECT_NEAR(r.model.J_leg / r.model.J_body, 0.25 / 2.5, 1e-12);
   // The slope's re-solve is refined only while the estimate leaves the model by more than the
   // tolerance: the model's slope is within the tolerance of the final estimate (itself within
   // 0.5 mrad of the robot's, below), so within 1.5 mrad of the robot's.
-  EXPECT_NEAR(r.slope, slope, tol.slope_tolerance + 5e-4);
+  EXPECT_NEAR(r.model.slope, slope, tol.slope_tolerance + 5e-4);
   EXPECT_FALSE(rig.c().terms_identification().LeavesModel(rig.c().model_params()));
-  EXPECT_NEAR(r.c_d, c_d, tol.drag_tolerance);
+  EXPECT_NEAR(r.model.c_d, c_d, tol.drag_tolerance);
   const HopperParams& p = rig.c().model_params();
-  EXPECT_EQ(p.b_leg, r.b_leg);
-  EXPECT_EQ(p.slope, r.slope);
+  EXPECT_EQ(p.b_leg, r.model.b_leg);
+  EXPECT_EQ(p.slope, r.model.slope);
   const TermsIdentification::Estimate e = rig.c().terms_identification().estimate();
   EXPECT_NEAR(e.b_leg.value, b_leg, 0.01 * b_leg + 0.02);
   EXPECT_NEAR(e.b_hip.value, b_hip, 0.01 * b_hip + 1e-3);
@@ -260,9 +261,9 @@ void ExpectTheTermsIdentified(const char* mjcf, void (*edit)(mjModel*), double g
   EXPECT_NEAR(e.c_d.value, c_d, gain == 1.0 ? 1e-4 : tol.drag_tolerance);
   EXPECT_EQ(e.b_leg.rejected + e.b_hip.rejected + e.slope.rejected, 0);
   for (const HopReport& h : reports) {  // the reports say which model ran
-    EXPECT_EQ(h.model_params.b_leg, h.hop < first.took_over_hop ? 0.0 : first.b_leg) << h.hop;
-    EXPECT_EQ(h.model_params.J_body, h.hop < first.took_over_hop ? 2.5 : first.j_body) << h.hop;
-    if (h.hop >= r.took_over_hop) EXPECT_EQ(h.model_params.slope, r.slope) << h.hop;
+    EXPECT_EQ(h.model_params.b_leg, h.hop < first.took_over_hop ? 0.0 : first.model.b_leg) << h.hop;
+    EXPECT_EQ(h.model_params.J_body, h.hop < first.took_over_hop ? 2.5 : first.model.J_body) << h.hop;
+    if (h.hop >= r.took_over_hop) EXPECT_EQ(h.model_params.slope, r.model.slope) << h.hop;
   }
 }
 
@@ -302,8 +303,8 @@ TEST(ControllerIdentificationTest, TheTermsNeverFlipAndAreDeterministic) {
   const HopperController& a = t.a->c();
   ASSERT_EQ(a.resolves().size(), 1u);
   // The 8 kg robot's drag (0.01 kg/m) and the damper, on the 10 kg drag-free model.
-  EXPECT_NEAR(a.resolves()[0].c_d, 0.01, 2e-4);
-  EXPECT_NEAR(a.resolves()[0].b_leg, 2.0, 0.1);
+  EXPECT_NEAR(a.resolves()[0].model.c_d, 0.01, 2e-4);
+  EXPECT_NEAR(a.resolves()[0].model.b_leg, 2.0, 0.1);
   EXPECT_NEAR(a.terms_identification().estimate().c_d.value, 0.01, 1e-4);
   EXPECT_FALSE(a.terms_identification().LeavesModel(a.model_params()));
   EXPECT_FALSE(a.mass_identification().LeavesModel(a.model_params().M));
