@@ -87,6 +87,8 @@ struct ModelResolve {
   HopperParams model;     ///< the new model (ResolvedTerms: what identification may change)
   double wall_ms = 0.0;   ///< wall time of the re-solve (gait + u^0, or the law cache), ms
   int took_over_hop = -1; ///< the hop in which the new u^0 took over (-1: not yet)
+  /// The new driver's "Initialize" hop (settle_hops, settle_cost; -1: not yet, or OC-FB).
+  int initialize_hop = -1;
   std::string law_cache;  ///< where the new u^0 came from (as law_cache_status())
 };
 

@@ -67,6 +67,13 @@ void ValidateConfig(const ControllerConfig& c) {
   }
   const IdentificationSettings& id = c.identification;
   if (id.settle_hops < 0) fail("identification.settle_hops", id.settle_hops, ">= 0");
+  if (!(id.settle_cost >= 0.0) || !std::isfinite(id.settle_cost)) {
+    fail("identification.settle_cost", id.settle_cost, "finite and >= 0");
+  }
+  if (id.settle_hops_max < id.settle_hops) {
+    const std::string bound = ">= identification.settle_hops (" + std::to_string(id.settle_hops) + ")";
+    fail("identification.settle_hops_max", id.settle_hops_max, bound.c_str());
+  }
   if (!(id.mass_resolution > 0.0) || !std::isfinite(id.mass_resolution)) {
     fail("identification.mass_resolution", id.mass_resolution, "finite and > 0");
   }
@@ -297,6 +304,9 @@ void HopperController::TakeOverResolvedModel() {
   // The running hop is the new driver's trial 0, settle_hops whole hops follow, then its
   // "Initialize" hop: settle_hops + 2 warm-up trials.
   MakeDriver(config_.identification.settle_hops + 2);
+  settle_extra_ = config_.identification.settle_cost > 0.0
+                      ? config_.identification.settle_hops_max - config_.identification.settle_hops
+                      : 0;
   law_ = &fallback_;
   law_->BeginTrial();
 }
@@ -675,7 +685,21 @@ void HopperController::EndHop(double t, const FlightState14& x) {
     law_->BeginTrial();
     return;
   }
+  // After a re-solve: the new driver's "Initialize" waits for a hop of the new u^0 that has
+  // settled on its gait (settle_cost), at most settle_hops_max hops.
+  if (settle_extra_ > 0 && driver_->CompletionLearns() && !driver_->initialized()) {
+    if (r.cost <= config_.identification.settle_cost * model_cost_) {
+      settle_extra_ = 0;
+    } else {
+      driver_->DelayInitialize();
+      --settle_extra_;
+    }
+  }
   const bool learns = driver_->CompletionLearns();
+  if (learns && !driver_->initialized() && !resolves_.empty() &&
+      resolves_.back().took_over_hop >= 0 && resolves_.back().initialize_hop < 0) {
+    resolves_.back().initialize_hop = hop_;
+  }
   waiting_.push_back({r, true});
   recording_ = 1 - recording_;  // the finished hop's recorder now belongs to the offline part
   job_hop_ = hop_;

@@ -65,6 +65,14 @@ struct IdentificationSettings {
   /// Whole hops of the new u^0 before the new driver's "Initialize" hop (the hop in which the
   /// new law took over is not counted), >= 0; default 2.
   int settle_hops = 2;
+  /// After settle_hops, the "Initialize" hop is the first hop of the new u^0 whose cost (42) is
+  /// at most settle_cost x u^0's cost on the model (the new u^0 has settled on its gait); 0 =
+  /// the hop after settle_hops whatever its cost. >= 0; default 2 (docs/experiments.md,
+  /// "Learning from a settled hop").
+  double settle_cost = 2.0;
+  /// Whole hops of the new u^0 at most before "Initialize" when none settles, >= settle_hops;
+  /// default 30.
+  int settle_hops_max = 30;
   /// Simulated s from the identifying hop's end until the re-solved u^0 may take over (the
   /// offline part loads or solves the gait and u^0 meanwhile; with measured_latency at least its
   /// wall time), >= 0; default 0.1 s: a law-cache load (about 6 ms here) with a margin, so that
@@ -271,6 +279,7 @@ class HopperController {
   OnlineController bridge_;    // a copy of u^0 that runs while the offline part works
   std::unique_ptr<TrialDriver> driver_;
   double model_cost_ = 0.0;
+  int settle_extra_ = 0;  // hops "Initialize" may still wait for a settled hop (settle_cost)
   int model_iterations_ = 0;
   std::string law_cache_status_ = "solved";
   bool law_cache_trouble_ = false;

@@ -391,6 +391,7 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
     d["hop"] = r.hop;
     for (const auto& [name, value] : plugin::ResolvedTerms(r.model)) d[name] = value;
     d["took_over_hop"] = r.took_over_hop;
+    d["initialize_hop"] = r.initialize_hop;
     d["wall_ms"] = r.wall_ms;
     d["initial_law"] = r.law_cache;
     resolves.append(d);
@@ -478,7 +479,7 @@ law, the integration steps of its backward passes and its thread CPU time); 'tra
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,
 sim_time, frames (PNG files written), initial_law (where u^0 came from, as summary.json's
 initial_law) and resolves (the re-solves of u^0 on an identified model: hop, mass, b_leg, b_hip,
-slope, j_body, j_leg, c_d, took_over_hop, wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
+slope, j_body, j_leg, c_d, took_over_hop, initialize_hop, wall_ms, initial_law). ddoc.to_dataframe turns either table into a pandas
 DataFrame. Bad input raises ValueError; the GIL is released while it runs; Ctrl-C raises
 ddoc.SolveInterrupted with the partial result in .result; a controller failure or a non-finite
 MuJoCo state raises ddoc.RunFailed with it in .result; MuJoCo's warnings are RuntimeWarnings.)");

@@ -156,6 +156,12 @@ class TrialDriver {
   /// (36) and backtracking, (30) on an accepted trial, (31) and the next law). Allocates.
   TrialOutcome CompleteTrial(const Trajectory& measured);
 
+  /// True once the learner has its "Initialize" trial (false for OC-FB).
+  bool initialized() const { return learner_ != nullptr && learner_->initialized(); }
+  /// Before "Initialize": one more warm-up trial of u^0 (the current trial does not initialize);
+  /// no effect after it or for OC-FB. Reset() returns to settings().warmup_trials.
+  void DelayInitialize();
+
   /// From now on every trial runs the current law; CompleteTrial only reports. Reset() undoes it.
   void Freeze() { frozen_ = true; }
   bool frozen() const { return frozen_; }
@@ -193,6 +199,7 @@ class TrialDriver {
   Policy* law_ = nullptr;             // the law of the current trial
   OnlineController* learned_ = nullptr;  // law_ when the learner made it, else null
   int trial_ = 0;
+  int warmup_trials_ = 1;  // settings_.warmup_trials plus DelayInitialize's
   bool frozen_ = false;
   // Harm guard: judged costs of a law's runs (count, sum, sum of squared deviations).
   struct Runs {

@@ -139,6 +139,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (s.identify_mass) config.identification.mass = *s.identify_mass;
   if (s.identify_terms) config.identification.terms = *s.identify_terms;
   if (s.settle_hops) config.identification.settle_hops = *s.settle_hops;
+  if (s.settle_cost) config.identification.settle_cost = *s.settle_cost;
+  if (s.settle_hops_max) config.identification.settle_hops_max = *s.settle_hops_max;
   if (s.resolve_latency) config.identification.resolve_latency = *s.resolve_latency;
   return config;
 }

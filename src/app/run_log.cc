@@ -228,6 +228,7 @@ void RunLog::WriteSummary(const Summary& s) {
     nlohmann::ordered_json resolve = {{"hop", r.hop}};
     for (const auto& [name, value] : plugin::ResolvedTerms(r.model)) resolve[name] = value;
     resolve["took_over_hop"] = HopOrNull(r.took_over_hop);
+    resolve["initialize_hop"] = HopOrNull(r.initialize_hop);
     resolve["wall_ms"] = r.wall_ms;
     resolve["initial_law"] = r.law_cache;
     j["identification"]["resolves"].push_back(resolve);

@@ -112,6 +112,7 @@ const std::vector<ElementSpec>& Elements() {
       {"contact", false, {Text("substep_events")}},
       {"identification", false,
        {Text("mass"), Text("terms"), Integer("settle_hops", 0),
+        Number("settle_cost", kNonNegative), Integer("settle_hops_max", 0),
         Number("resolve_latency", kNonNegative)}},
       {"gait", false,
        {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
@@ -360,6 +361,8 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
     if (auto v = GetChoice(path, e, "mass", "off", "on")) s->identify_mass = *v == "on";
     if (auto v = GetChoice(path, e, "terms", "off", "on")) s->identify_terms = *v == "on";
     s->settle_hops = GetInteger(path, e, "settle_hops");
+    s->settle_cost = GetNumber(path, e, "settle_cost");
+    s->settle_hops_max = GetInteger(path, e, "settle_hops_max");
     s->resolve_latency = GetNumber(path, e, "resolve_latency");
   } else if (tag == "gait") {
     s->forward_speed = GetNumber(path, e, "speed").value_or(0.0);

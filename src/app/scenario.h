@@ -109,11 +109,14 @@ struct Scenario {
   ExperimentOverrides experiment;    // <experiment .../>
   // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
   std::optional<bool> substep_events;
-  // <identification mass="on|off" terms="on|off" settle_hops="N" resolve_latency="S"/>:
-  // IdentificationSettings (unset: off, off, 2, 0.1 s)
+  // <identification mass="on|off" terms="on|off" settle_hops="N" settle_cost="F"
+  // settle_hops_max="N" resolve_latency="S"/>: IdentificationSettings (unset: off, off, 2, 2,
+  // 30, 0.1 s)
   std::optional<bool> identify_mass;
   std::optional<bool> identify_terms;
   std::optional<int> settle_hops;
+  std::optional<double> settle_cost;
+  std::optional<int> settle_hops_max;
   std::optional<double> resolve_latency;
 };
 

@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/trial_driver.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -55,6 +56,7 @@ void TrialDriver::Reset() {
     if (cyclic_seed_.size() > 0) learner_->SeedCyclicValue(cyclic_seed_);
   }
   trial_ = 0;
+  warmup_trials_ = settings_.warmup_trials;
   frozen_ = false;
   runs_ = 0;
   run_cost_sum_ = 0;
@@ -249,7 +251,12 @@ void TrialDriver::UseLearnedLaw(OnlineController& law) {
 }
 
 bool TrialDriver::CompletionLearns() const {
-  return learner_ != nullptr && !frozen_ && trial_ + 1 >= settings_.warmup_trials;
+  return learner_ != nullptr && !frozen_ && trial_ + 1 >= warmup_trials_;
+}
+
+void TrialDriver::DelayInitialize() {
+  if (learner_ == nullptr || learner_->initialized()) return;
+  warmup_trials_ = std::max(warmup_trials_, trial_ + 2);
 }
 
 TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {

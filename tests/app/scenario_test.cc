@@ -237,14 +237,20 @@ TEST_F(ScenarioTest, Identification) {
   EXPECT_FALSE(c.identification.mass);  // the default: off
   EXPECT_FALSE(c.identification.terms);
   EXPECT_EQ(c.identification.settle_hops, 2);
+  EXPECT_EQ(c.identification.settle_cost, 2.0);
+  EXPECT_EQ(c.identification.settle_hops_max, 30);
   EXPECT_EQ(c.identification.resolve_latency, 0.1);
   c = ControllerConfigFor(
-      LoadScenario(Write(Fill(fmt, "mass='on' settle_hops='0' resolve_latency='0.5'"))),
+      LoadScenario(Write(Fill(fmt, "mass='on' settle_hops='0' settle_cost='2.5' "
+                                   "settle_hops_max='7' resolve_latency='0.5'"))),
       HopperParams());
   EXPECT_TRUE(c.identification.mass);
   EXPECT_FALSE(c.identification.terms);
   EXPECT_EQ(c.identification.settle_hops, 0);
+  EXPECT_EQ(c.identification.settle_cost, 2.5);
+  EXPECT_EQ(c.identification.settle_hops_max, 7);
   EXPECT_EQ(c.identification.resolve_latency, 0.5);
+  ExpectError(Fill(fmt, "settle_cost='-1'"), {"<identification>", "settle_cost = -1"});
   ExpectError(Fill(fmt, "resolve_latency='-1'"), {"<identification>", "resolve_latency = -1"});
   ExpectError(Fill(fmt, "mass='yes'"), {"<identification>", "mass=\"yes\"", "off or on"});
   c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "terms='on'"))), HopperParams());
@@ -254,7 +260,8 @@ TEST_F(ScenarioTest, Identification) {
   ExpectError(Fill(fmt, "settle_hops='-1'"), {"<identification>", "settle_hops = -1", ">= 0"});
   ExpectError(Fill(fmt, "drag='on'"),
               {"<identification>", "unknown attribute drag",
-               "expected mass, terms, settle_hops, resolve_latency"});
+               "expected mass, terms, settle_hops, settle_cost, settle_hops_max, "
+               "resolve_latency"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {

@@ -216,6 +216,39 @@ TEST_F(TrialDriverTest, WarmupTrialsRunTheFallbackAndTheLastOneInitializes) {
   EXPECT_EQ(driver.learner()->trials(), 1);
 }
 
+// DelayInitialize before the Initialize trial: one more trial of u^0, which then initializes;
+// after it, and for OC-FB, nothing changes; Reset returns to the settings' warm-up.
+TEST_F(TrialDriverTest, DelayInitializeRunsTheFallbackOneTrialMore) {
+  TrialDriver driver(p.problem, DriverSettings(Method::kAlg1), fallback);
+  Trajectory measured;
+  EXPECT_TRUE(driver.CompletionLearns());
+  driver.DelayInitialize();
+  driver.DelayInitialize();  // twice before the same trial: still one trial more
+  EXPECT_FALSE(driver.CompletionLearns());
+  TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+  EXPECT_FALSE(o.learned);
+  EXPECT_FALSE(driver.initialized());
+  EXPECT_TRUE(driver.runs_fallback());
+  driver.DelayInitialize();
+  o = driver.RunTrial(plant, lq.x0, &measured);
+  EXPECT_FALSE(o.learned);
+  EXPECT_TRUE(driver.CompletionLearns());
+  o = driver.RunTrial(plant, lq.x0, &measured);  // trial 2 initializes
+  EXPECT_TRUE(o.learned);
+  EXPECT_TRUE(driver.initialized());
+  EXPECT_EQ(driver.learner()->nominal().T, measured.T);
+  driver.DelayInitialize();  // after Initialize: no effect
+  EXPECT_TRUE(driver.CompletionLearns());
+  EXPECT_FALSE(driver.runs_fallback());
+  driver.Reset();
+  EXPECT_TRUE(driver.CompletionLearns());
+
+  TrialDriver ocfb(p.problem, DriverSettings(Method::kOcfb), fallback);
+  ocfb.DelayInitialize();
+  EXPECT_FALSE(ocfb.initialized());
+  EXPECT_TRUE(ocfb.RunTrial(plant, lq.x0, &measured).accepted);
+}
+
 TEST_F(TrialDriverTest, LearnerThatStopsBeforeAcceptingFallsBackToTheInitialLaw) {
   // (36) can never hold and alpha_min lies just below alpha_0: the first trial terminates the
   // line search with no accepted iteration, and from then on u^0 runs (not Learner::NextTrial's

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <vector>
 
@@ -180,6 +181,7 @@ TEST(ControllerIdentificationTest, SynchronousLearningTakesOverAtTheTakeoff) {
   ControllerConfig config = Identifying(Method::kAlg1);
   config.offline_latency = 0.0;
   config.identification.settle_hops = 1;
+  config.identification.settle_cost = 0.0;  // "Initialize" whatever the hop's cost
   Robot rig("hopper_m8.xml", config, false);
   ASSERT_TRUE(rig.ok());
   const std::vector<HopReport> reports = RunHops(&rig, 8);
@@ -311,6 +313,62 @@ TEST(ControllerIdentificationTest, TheTermsNeverFlipAndAreDeterministic) {
 }
 
 // Bad identification settings fail Create, naming the field and the bound.
+// The hop of a run that initialized the new driver: the last hop of u^0 (alpha 0) from
+// `from` on before the first learning trial (alpha > 0); -1 when no trial ran.
+int InitializeHop(const std::vector<HopReport>& reports, int from) {
+  for (const HopReport& h : reports) {
+    if (h.hop > from && h.alpha > 0.0) return h.hop - 1;
+  }
+  return -1;
+}
+
+// settle_cost: after settle_hops, "Initialize" is the first hop of the new u^0 whose cost (42)
+// is at most settle_cost x u^0's cost on the model, or the hop settle_hops_max after the
+// takeover hop when none is.
+TEST(ControllerIdentificationTest, InitializeWaitsForASettledHop) {
+  int delayed = 0;  // robots on which the threshold moved "Initialize" past settle_hops
+  for (const char* mjcf : {"hopper_m8.xml", "hopper_m12.xml"}) {
+    SCOPED_TRACE(mjcf);
+    ControllerConfig config = Identifying(Method::kAlg1);
+    config.offline_latency = 0.0;  // every hop learned from: the hop counts are exact
+    config.identification.settle_hops = 1;
+    config.identification.settle_cost = 1.05;
+    config.identification.settle_hops_max = 12;
+    Robot rig(mjcf, config, false);
+    ASSERT_TRUE(rig.ok());
+    const std::vector<HopReport> reports = RunHops(&rig, 20);
+    ASSERT_EQ(reports.size(), 20u);
+    ASSERT_EQ(rig.c().resolves().size(), 1u) << Describe(rig.c().resolves());
+    const int took_over = rig.c().resolves()[0].took_over_hop;
+    const int init = InitializeHop(reports, took_over);
+    EXPECT_EQ(rig.c().resolves()[0].initialize_hop, init);
+    ASSERT_GE(init, took_over + 2) << "at least settle_hops whole hops of the new u^0";
+    ASSERT_LE(init, took_over + 1 + 12) << "at most settle_hops_max";
+    const double threshold = 1.05 * rig.c().model_cost();
+    for (int h = took_over; h <= init; ++h) EXPECT_EQ(reports[h].alpha, 0.0) << "hop " << h;
+    for (int h = took_over + 2; h < init; ++h) {
+      EXPECT_GT(reports[h].cost, threshold) << "hop " << h << " had settled";
+    }
+    if (init < took_over + 1 + 12) EXPECT_LE(reports[init].cost, threshold);
+    if (init > took_over + 2) ++delayed;
+    std::printf("%s: took over in hop %d, Initialize hop %d (threshold %.3f)\n", mjcf, took_over,
+                init, threshold);
+  }
+  EXPECT_GT(delayed, 0) << "no robot waited: the test does not exercise the threshold";
+  // A threshold no hop meets: "Initialize" after settle_hops_max hops.
+  ControllerConfig config = Identifying(Method::kAlg1);
+  config.offline_latency = 0.0;
+  config.identification.settle_hops = 1;
+  config.identification.settle_cost = 1e-6;
+  config.identification.settle_hops_max = 4;
+  Robot rig("hopper_m8.xml", config, false);
+  ASSERT_TRUE(rig.ok());
+  const std::vector<HopReport> reports = RunHops(&rig, 10);
+  ASSERT_EQ(rig.c().resolves().size(), 1u);
+  const int took_over = rig.c().resolves()[0].took_over_hop;
+  EXPECT_EQ(InitializeHop(reports, took_over), took_over + 1 + 4);
+}
+
 TEST(ControllerIdentificationTest, BadSettingsAreNamed) {
   MjModelPtr m = LoadMjcf(std::string(DDOC_MODELS_DIR) + "/hopper_m8.xml");
   struct Case {
@@ -320,6 +378,10 @@ TEST(ControllerIdentificationTest, BadSettingsAreNamed) {
   const Case cases[] = {
       {[](IdentificationSettings* s) { s->settle_hops = -1; },
        "config.identification.settle_hops = -1, expected >= 0"},
+      {[](IdentificationSettings* s) { s->settle_cost = -1.0; },
+       "config.identification.settle_cost = -1, expected finite and >= 0"},
+      {[](IdentificationSettings* s) { s->settle_hops_max = 1; },
+       "config.identification.settle_hops_max = 1, expected >= identification.settle_hops (2)"},
       {[](IdentificationSettings* s) { s->mass_resolution = 0.0; },
        "config.identification.mass_resolution = 0, expected finite and > 0"},
       {[](IdentificationSettings* s) { s->resolve_latency = std::nan(""); },
