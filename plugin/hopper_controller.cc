@@ -304,9 +304,6 @@ void HopperController::TakeOverResolvedModel() {
   // The running hop is the new driver's trial 0, settle_hops whole hops follow, then its
   // "Initialize" hop: settle_hops + 2 warm-up trials.
   MakeDriver(config_.identification.settle_hops + 2);
-  settle_extra_ = config_.identification.settle_cost > 0.0
-                      ? config_.identification.settle_hops_max - config_.identification.settle_hops
-                      : 0;
   law_ = &fallback_;
   law_->BeginTrial();
 }
@@ -685,21 +682,20 @@ void HopperController::EndHop(double t, const FlightState14& x) {
     law_->BeginTrial();
     return;
   }
-  // After a re-solve: the new driver's "Initialize" waits for a hop of the new u^0 that has
-  // settled on its gait (settle_cost), at most settle_hops_max hops.
-  if (settle_extra_ > 0 && driver_->CompletionLearns() && !driver_->initialized()) {
-    if (r.cost <= config_.identification.settle_cost * model_cost_) {
-      settle_extra_ = 0;
-    } else {
+  // After a re-solve the new driver's "Initialize" waits for a hop of the new u^0 that has
+  // settled on its gait (settle_cost), at the latest its trial settle_hops_max + 1 (trial 0 is
+  // the hop the new u^0 took over in).
+  ModelResolve* resolve = resolves_.empty() ? nullptr : &resolves_.back();
+  if (resolve != nullptr && resolve->took_over_hop >= 0 && resolve->initialize_hop < 0 &&
+      driver_->CompletionLearns() && !driver_->initialized()) {
+    if (id.settle_cost > 0.0 && !(r.cost <= id.settle_cost * model_cost_) &&
+        driver_->trial() <= id.settle_hops_max) {
       driver_->DelayInitialize();
-      --settle_extra_;
+    } else {
+      resolve->initialize_hop = hop_;
     }
   }
   const bool learns = driver_->CompletionLearns();
-  if (learns && !driver_->initialized() && !resolves_.empty() &&
-      resolves_.back().took_over_hop >= 0 && resolves_.back().initialize_hop < 0) {
-    resolves_.back().initialize_hop = hop_;
-  }
   waiting_.push_back({r, true});
   recording_ = 1 - recording_;  // the finished hop's recorder now belongs to the offline part
   job_hop_ = hop_;

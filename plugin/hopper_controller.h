@@ -279,7 +279,6 @@ class HopperController {
   OnlineController bridge_;    // a copy of u^0 that runs while the offline part works
   std::unique_ptr<TrialDriver> driver_;
   double model_cost_ = 0.0;
-  int settle_extra_ = 0;  // hops "Initialize" may still wait for a settled hop (settle_cost)
   int model_iterations_ = 0;
   std::string law_cache_status_ = "solved";
   bool law_cache_trouble_ = false;
