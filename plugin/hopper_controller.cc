@@ -59,6 +59,9 @@ void ValidateConfig(const ControllerConfig& c) {
   } else if (!(c.offline_latency >= 0.0 && c.offline_latency < c.durations.flight_min)) {
     fail("offline_latency", c.offline_latency, "in [0, durations.flight_min)");
   }
+  if (!(c.anchor_weight >= 0.0 && c.anchor_weight <= 1.0)) {
+    fail("anchor_weight", c.anchor_weight, "in [0, 1]");
+  }
   if (!(c.pitch_experiment.scale >= 0.0 && c.pitch_experiment.scale <= 1.0)) {
     fail("pitch_experiment.scale", c.pitch_experiment.scale, "in [0, 1]");
   }
@@ -254,7 +257,8 @@ void HopperController::MakeDriver(int warmup) {
   const bool mrl = settings.method == Method::kMrl;
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
-      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector()));
+      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector(),
+                          config_.anchor_weight));
   // The Initialize hop's pass sweeps its periodic value from u^0's fixed point on the model.
   driver_->SeedCyclicValue(cyclic_value_);
 }

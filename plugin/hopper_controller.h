@@ -104,6 +104,9 @@ struct ControllerConfig {
   /// I1 reference of the learner: true (default) the model gait's takeoff state (NOT the
   /// paper), false the hop's own start (42).
   bool anchor_reference = true;
+  /// With anchor_reference: I1's x_ref for the learner is w x the gait's takeoff state + (1 - w)
+  /// x the hop's own start, w in [0, 1]; 1 = the gait's alone. Default 1.
+  double anchor_weight = 1.0;
   /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
   /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;

@@ -407,7 +407,7 @@ std::string InitialLawKey(const ControllerConfig& c) {
   k.D("dt_model", c.dt_model);
   AddLearnerSettings(c.model_learner, &k);
   // Not read by the model solve: driver, contact, max_samples_per_mode, anchor_reference,
-  // offline_latency, offline_thread, pitch_experiment, law_cache.
+  // anchor_weight, offline_latency, offline_thread, pitch_experiment, law_cache.
   return k.text();
 }
 

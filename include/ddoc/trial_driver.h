@@ -47,6 +47,16 @@ struct HarmGuardSettings {
   /// trial's own cost, which its selection biased low. Default false (on the hopper's mass map
   /// it learns more and survives less: docs/experiments.md, "The harm guard").
   bool debias = false;
+  /// true: the re-runs alternate with runs of the law the accepted one replaced (the kept law,
+  /// u^0 before any): new, old, new, old, ..., verify_trials of each, so both start from states
+  /// the other left; the new law is abandoned when the mean of the paired differences of judged
+  /// cost exceeds `margin` standard errors of it (spread pooled over the run's comparisons).
+  /// No watch. Default false.
+  bool interleave = false;
+  /// true: the comparisons take the logarithm of each judged cost (a positive cost whose
+  /// run-to-run spread grows with its size; TrialOutcome::judged_cost stays the cost itself).
+  /// A judged cost <= 0 then throws InvalidArgument. Default false.
+  bool log_cost = false;
 };
 
 /// Settings of TrialDriver.
@@ -219,9 +229,13 @@ class TrialDriver {
   void Challenge(Target against, bool watch);
   void KeepNew();  // the accepted law passed: it becomes the kept law
   double JudgedCost(const Trajectory& measured, bool learns);
+  double Compared(double judged) const;  // what the comparisons use: judged, or its log
   // a's mean judged cost exceeds b's by more than margin standard errors.
   bool WorseThan(const Runs& a, const Runs& b) const;
   void Pool(const Runs& runs);  // adds a finished law's runs to the pooled spread
+  // interleave: one run of the alternation, and the decision after the last.
+  TrialOutcome& Interleaved(double judged, TrialOutcome& out);
+  void Abandon(TrialOutcome& out);  // back to target_'s checkpoint, the learner goes on
   const LearnerCheckpoint& Checkpoint(Target t) const;
   Runs& RunsOf(Target t);
   Phase phase_ = Phase::kNone;
@@ -239,6 +253,11 @@ class TrialDriver {
   int pooled_df_ = 0;
   OnlineController* pending_law_ = nullptr;  // the learner's next trial, waiting for the guard
   int reverts_ = 0;
+  bool new_turn_ = true;            // interleave: the next run is the law on trial's
+  std::vector<double> pair_new_;    // interleave: judged costs of the law on trial's runs
+  Runs pair_diffs_;                 // interleave: this comparison's paired differences
+  double pooled_diff_ss_ = 0;       // interleave: squared deviations of every comparison's
+  int pooled_diff_df_ = 0;          // paired differences, and their degrees of freedom
   int runs_ = 0;              // runs of the current law so far (runs_per_trial)
   double run_cost_sum_ = 0;   // their measured costs
 };

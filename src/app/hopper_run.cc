@@ -119,6 +119,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.verify_margin) config.driver.guard.margin = *l.verify_margin;
   if (l.watch_hops) config.driver.guard.watch_trials = *l.watch_hops;
   if (l.verify_debias) config.driver.guard.debias = *l.verify_debias;
+  if (l.verify_interleave) config.driver.guard.interleave = *l.verify_interleave;
+  if (l.verify_log) config.driver.guard.log_cost = *l.verify_log;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.start_correction) learner.start_correction = *l.start_correction;
@@ -132,6 +134,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
     if (l.terminal_event) ls->backward.terminal_event = *l.terminal_event;
   }
   if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
+  if (l.anchor_weight) config.anchor_weight = *l.anchor_weight;
   const ExperimentOverrides& x = s.experiment;
   if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
   if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;

@@ -100,12 +100,13 @@ const std::vector<ElementSpec>& Elements() {
         Number("epsilon", kPositive), Number("alpha_min", kPositive),
         Number("max_duration_step", kPositive), Number("regularization", kNonNegative),
         Number("alpha_initial", {0.0, 1.0, true, false}), Number("cyclic_value", Closed(0, 1)),
-        Text("terminal"), Text("reference"), Text("alpha_after_accept"), Integer("delta_i", 1),
+        Text("terminal"), Text("reference"), Number("anchor_weight", Closed(0, 1)), Text("alpha_after_accept"), Integer("delta_i", 1),
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
         Text("blend_feedback"), Text("start_correction"),
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
-        Number("verify_margin", kNonNegative), Text("verify_debias"), Integer("watch_hops", 0),
+        Number("verify_margin", kNonNegative), Text("verify_debias"), Text("verify_interleave"), Text("verify_log"),
+        Integer("watch_hops", 0),
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
@@ -290,6 +291,7 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   if (auto v = GetChoice(path, e, "reference", "own", "gait")) {
     l->anchor_reference = *v == "gait";
   }
+  l->anchor_weight = GetNumber(path, e, "anchor_weight");
   if (auto v = GetChoice(path, e, "alpha_after_accept", "reset", "grow")) {
     l->reset_alpha_on_accept = *v == "reset";
   }
@@ -307,6 +309,10 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   l->verify_margin = GetNumber(path, e, "verify_margin");
   l->watch_hops = GetInteger(path, e, "watch_hops");
   if (auto v = GetChoice(path, e, "verify_debias", "off", "on")) l->verify_debias = *v == "on";
+  if (auto v = GetChoice(path, e, "verify_interleave", "off", "on")) {
+    l->verify_interleave = *v == "on";
+  }
+  if (auto v = GetChoice(path, e, "verify_log", "off", "on")) l->verify_log = *v == "on";
   l->curvature_scale_min = GetNumber(path, e, "curvature_scale_min");
 }
 

@@ -59,6 +59,7 @@ struct LearningOverrides {
   // reference="own" (paper: I1 compares the takeoff state with the hop's own start) | "gait" (the
   // model gait's takeoff state: ControllerConfig::anchor_reference)
   std::optional<bool> anchor_reference;
+  std::optional<double> anchor_weight;  // ControllerConfig::anchor_weight, in [0, 1]
   std::optional<bool> remeasure;        // remeasure="on": LearnerSettings::remeasure_nominal
   std::optional<double> noise_margin;   // LearnerSettings::noise_margin (with remeasure="on")
   std::optional<int> hops_per_trial;    // TrialDriverSettings::runs_per_trial, >= 1
@@ -66,6 +67,8 @@ struct LearningOverrides {
   std::optional<double> verify_margin;  // HarmGuardSettings::margin, >= 0
   std::optional<int> watch_hops;        // HarmGuardSettings::watch_trials, >= 2
   std::optional<bool> verify_debias;    // HarmGuardSettings::debias
+  std::optional<bool> verify_interleave;  // HarmGuardSettings::interleave
+  std::optional<bool> verify_log;       // HarmGuardSettings::log_cost
   std::optional<double> curvature_scale_min;  // LearnerSettings::curvature_scale_min, (0, 1]
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
   std::optional<bool> start_correction;  // "on"/"off": LearnerSettings::start_correction

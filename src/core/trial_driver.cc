@@ -37,6 +37,13 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
                           std::to_string(settings.guard.watch_trials) +
                           ", expected 0 (no watch) or >= 2");
   }
+  if (settings.guard.interleave &&
+      (settings.guard.verify_trials == 0 || settings.guard.watch_trials != 0)) {
+    throw InvalidArgument("TrialDriverSettings: guard.interleave needs guard.verify_trials >= 2 "
+                          "and guard.watch_trials = 0 (verify_trials = " +
+                          std::to_string(settings.guard.verify_trials) + ", watch_trials = " +
+                          std::to_string(settings.guard.watch_trials) + ")");
+  }
   if (!(settings.guard.margin >= 0) || !std::isfinite(settings.guard.margin)) {
     throw InvalidArgument("TrialDriverSettings: guard.margin = " +
                           std::to_string(settings.guard.margin) + ", expected finite and >= 0");
@@ -71,6 +78,11 @@ void TrialDriver::Reset() {
   pooled_df_ = 0;
   pending_law_ = nullptr;
   reverts_ = 0;
+  new_turn_ = true;
+  pair_new_.clear();
+  pair_diffs_ = Runs{};
+  pooled_diff_ss_ = 0;
+  pooled_diff_df_ = 0;
   UseFallback();
 }
 
@@ -93,6 +105,15 @@ double TrialDriver::JudgedCost(const Trajectory& measured, bool learns) {
   const double cost = EvaluateCost(*problem_, measured).total;
   reference_(measured, learns);  // leaves the reference the learner works with set
   return cost;
+}
+
+double TrialDriver::Compared(double judged) const {
+  if (!settings_.guard.log_cost || !std::isfinite(judged)) return judged;
+  if (!(judged > 0)) {
+    throw InvalidArgument("TrialDriver: guard.log_cost needs positive judged costs, trial " +
+                          std::to_string(trial_) + " judged " + std::to_string(judged));
+  }
+  return std::log(judged);
 }
 
 bool TrialDriver::WorseThan(const Runs& a, const Runs& b) const {
@@ -161,9 +182,10 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
   out.cost = EvaluateCost(*problem_, measured).total;
   out.nominal_cost = learner_->nominal_cost();
   out.status = learner_->status();
-  const double judged = std::isfinite(out.judged_cost) ? out.judged_cost
+  const double judged = std::isfinite(out.judged_cost) ? Compared(out.judged_cost)
                                                        : std::numeric_limits<double>::infinity();
   ++trial_;
+  if (settings_.guard.interleave) return Interleaved(judged, out);
   if (phase_ == Phase::kVerify) {
     new_runs_.Add(judged);
     new_learner_sum_ += out.cost;
@@ -209,6 +231,11 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
     return out;
   }
   Pool(new_runs_);
+  Abandon(out);
+  return out;
+}
+
+void TrialDriver::Abandon(TrialOutcome& out) {
   learner_->Restore(Checkpoint(target_));  // (30) under the learner's reference, still set
   if (target_ == Target::kInitial) {
     kept_ = previous_ = LearnerCheckpoint{};
@@ -222,6 +249,56 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
   pending_law_ = nullptr;
   window_count_ = 0;
   UseLearnedLaw(learner_->NextTrial());
+}
+
+TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
+  // Runs alternate: the law on trial (new_turn_), then the law it replaced, and so on; the k-th
+  // paired difference is the k-th run of the first minus the k-th of the second.
+  if (new_turn_) {
+    new_runs_.Add(judged);
+    new_learner_sum_ += out.cost;
+    pair_new_.push_back(judged);
+  } else {
+    other_runs_.Add(judged);
+    pair_diffs_.Add(pair_new_[static_cast<size_t>(other_runs_.n - 1)] - judged);
+  }
+  const bool fell = new_turn_ && !std::isfinite(judged);  // the law on trial is out at once
+  if (--verify_left_ > 0 && !fell) {
+    new_turn_ = !new_turn_;
+    if (new_turn_) {
+      UseLearnedLaw(learner_->nominal_law());
+    } else if (target_ == Target::kInitial) {
+      UseFallback();
+    } else {
+      UseLearnedLaw(kept_.law);
+    }
+    return out;
+  }
+  phase_ = Phase::kNone;
+  new_turn_ = true;
+  bool worse = fell;
+  if (!fell) {
+    // Mean difference against margin standard errors of it, the spread of the differences
+    // pooled over this comparison and the run's earlier ones.
+    const Runs& d = pair_diffs_;
+    const double ss = pooled_diff_ss_ + d.ss;
+    const int df = pooled_diff_df_ + d.n - 1;
+    const double spread = df > 0 && std::isfinite(ss) ? std::sqrt(ss / df) : 0.0;
+    worse = !(d.mean() <= settings_.guard.margin * spread / std::sqrt(d.n));
+    if (d.n >= 2 && std::isfinite(d.ss)) {
+      pooled_diff_ss_ += d.ss;
+      pooled_diff_df_ += d.n - 1;
+    }
+  }
+  if (other_runs_.n > 0) RunsOf(target_) = other_runs_;
+  pair_new_.clear();
+  pair_diffs_ = Runs{};
+  other_runs_ = Runs{};
+  if (worse) {
+    Abandon(out);
+  } else {
+    KeepNew();
+  }
   return out;
 }
 
@@ -294,7 +371,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.cost = EvaluateCost(*problem_, measured).total;
     if (learner_) out.status = learner_->status();
     // A warm-up trial ran u^0: a sample of its cost for the guard.
-    if (guard && !learner_->initialized()) initial_runs_.Add(out.judged_cost);
+    if (guard && !learner_->initialized()) initial_runs_.Add(Compared(out.judged_cost));
   } else if (!learner_->initialized()) {
     // This trial ran u^0, T^0: Algorithm 1's "Initialize" (x^0, I^0, then (30)).
     if (settings_.method == Method::kMrl) {
@@ -312,7 +389,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.predicted = 0;
     out.optimality = learner_->optimality().total;
     if (guard) {
-      initial_runs_.Add(out.judged_cost);
+      initial_runs_.Add(Compared(out.judged_cost));
       initial_ = learner_->Save();
       Pool(initial_runs_);  // warm-up runs of u^0 count towards the spread
     }
@@ -343,12 +420,20 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
       pending_law_ = learned_;
       phase_ = Phase::kVerify;
       verify_left_ = settings_.guard.verify_trials;
+      if (settings_.guard.interleave) {
+        verify_left_ *= 2;  // as many runs of the replaced law, alternating
+        target_ = kept_.valid ? Target::kKept : Target::kInitial;
+        new_turn_ = true;
+        pair_new_.clear();
+        pair_diffs_ = Runs{};
+        other_runs_ = Runs{};
+      }
       new_runs_ = Runs{};
       new_learner_sum_ = 0;
       UseLearnedLaw(learner_->nominal_law());
     } else if (guard && settings_.guard.watch_trials > 0 && kept_.valid &&
                !learner_->nominal_is_initial() && learned_) {
-      Watch(std::isfinite(out.judged_cost) ? out.judged_cost
+      Watch(std::isfinite(out.judged_cost) ? Compared(out.judged_cost)
                                            : std::numeric_limits<double>::infinity());
     }
   }

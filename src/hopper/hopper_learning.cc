@@ -79,9 +79,20 @@ void HopperPredictionPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajec
   model_->Run(x0_, policy, out);
 }
 
-TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor) {
-  return [cost, anchor](const Trajectory& trial, bool for_learner) {
-    cost->SetReference(for_learner && anchor.size() > 0 ? anchor : trial.x0);
+TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor,
+                                               double anchor_weight) {
+  if (!(anchor_weight >= 0.0 && anchor_weight <= 1.0)) {
+    throw InvalidArgument("HopperCostReference: anchor_weight = " + std::to_string(anchor_weight) +
+                          ", expected in [0, 1]");
+  }
+  return [cost, anchor, anchor_weight](const Trajectory& trial, bool for_learner) {
+    if (!for_learner || anchor.size() == 0) {
+      cost->SetReference(trial.x0);
+    } else if (anchor_weight == 1.0) {
+      cost->SetReference(anchor);
+    } else {
+      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * trial.x0);
+    }
   };
 }
 

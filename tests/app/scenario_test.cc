@@ -144,6 +144,12 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   s = LoadScenario(Write(Fill(fmt, "reference='own'")));
   ASSERT_TRUE(s.learning.anchor_reference.has_value());
   EXPECT_FALSE(*s.learning.anchor_reference);
+  EXPECT_FALSE(s.learning.anchor_weight.has_value());
+  s = LoadScenario(Write(Fill(fmt, "reference='gait' anchor_weight='0.9'")));
+  ASSERT_TRUE(s.learning.anchor_weight.has_value());
+  EXPECT_EQ(*s.learning.anchor_weight, 0.9);
+  ExpectError(Fill(fmt, "anchor_weight='1.5'"), {"<learning>", "anchor_weight", "1.5"});
+  ExpectError(Fill(fmt, "anchor_weight='-0.5'"), {"<learning>", "anchor_weight", "-0.5"});
   ExpectError(Fill(fmt, "reference='nominal'"),
               {"<learning>", "reference=\"nominal\"", "own or gait"});
   ExpectError(Fill(fmt, "terminal='takeoff'"),
@@ -201,6 +207,19 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   ExpectError(Fill(fmt, "start_correction='yes'"), {"start_correction=\"yes\"", "off or on"});
   ExpectError(Fill(fmt, "restart_alpha='0'"), {"restart_alpha"});
   ExpectError(Fill(fmt, "restart_alpha='1.5'"), {"restart_alpha"});
+  // The harm guard's interleaved comparison (off by default) and the anchor weight.
+  EXPECT_FALSE(c.driver.guard.interleave);
+  EXPECT_FALSE(c.driver.guard.log_cost);
+  EXPECT_DOUBLE_EQ(c.anchor_weight, 1.0);
+  c = ControllerConfigFor(
+      LoadScenario(Write(Fill(
+          fmt, "verify_hops='3' verify_interleave='on' verify_log='on' anchor_weight='0.8'"))),
+      HopperParams());
+  EXPECT_TRUE(c.driver.guard.interleave);
+  EXPECT_TRUE(c.driver.guard.log_cost);
+  EXPECT_EQ(c.driver.guard.verify_trials, 3);
+  EXPECT_DOUBLE_EQ(c.anchor_weight, 0.8);
+  ExpectError(Fill(fmt, "verify_interleave='2'"), {"verify_interleave=\"2\"", "off or on"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

@@ -488,6 +488,15 @@ TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
   margin.guard.margin = -1;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, margin, fallback); },
                    "guard.margin = -1.000000, expected finite and >= 0");
+  TrialDriverSettings interleave = DriverSettings(Method::kAlg1);
+  interleave.guard.interleave = true;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, interleave, fallback); },
+                   "guard.interleave needs guard.verify_trials >= 2 and guard.watch_trials = 0 "
+                   "(verify_trials = 0, watch_trials = 0)");
+  interleave.guard.verify_trials = 3;
+  interleave.guard.watch_trials = 3;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, interleave, fallback); },
+                   "(verify_trials = 3, watch_trials = 3)");
 }
 
 // A cost that is one of two quadratic costs: the learner's (judge = false) or the one the
@@ -584,6 +593,132 @@ TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialL
   EXPECT_EQ(driver.reverts(), accepted);
   EXPECT_TRUE(driver.learner()->nominal_is_initial());
   EXPECT_EQ(driver.learner()->nominal_cost(), o[0].cost);
+}
+
+// The interleaved guard on the same premise: each accepted law's 3 re-runs alternate with 3
+// runs of u^0 (new, u^0, new, u^0, new, u^0); every paired difference is the same positive
+// number on this deterministic plant (zero spread), so the law is abandoned after the sixth run
+// and the learner goes on from u^0's nominal.
+TEST_F(TrialDriverTest, TheInterleavedGuardAbandonsALawThatMeasuresWorseThanTheInitialLaw) {
+  QuadraticTrackingCost heavy_input(
+      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
+      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
+      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
+  TwoCosts costs(p.cost, heavy_input);
+  Problem problem = p.problem;
+  problem.cost = &costs;
+  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  Trajectory measured;
+  plant.Run(lq.x0, fallback, &measured);
+  costs.judge = true;
+  const double u0_judged = EvaluateCost(problem, measured).total;
+  costs.judge = false;
+
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.guard.verify_trials = 3;
+  settings.guard.interleave = true;
+  TrialDriver driver(problem, settings, fallback, nullptr, reference);
+  std::vector<TrialOutcome> o;
+  for (int i = 0; i < 40 || driver.verifying() > 0; ++i) {
+    o.push_back(driver.RunTrial(plant, lq.x0, &measured));
+  }
+  int accepted = 0;
+  for (size_t i = 1; i < o.size(); ++i) {
+    if (!o[i].learned || !o[i].accepted) continue;
+    ASSERT_LT(i + 6, o.size());
+    ++accepted;
+    for (size_t j = i + 1; j <= i + 6; ++j) {
+      const bool u0_turn = (j - i) % 2 == 0;
+      EXPECT_TRUE(o[j].remeasured) << "trial " << j;
+      EXPECT_FALSE(o[j].learned) << "trial " << j;
+      EXPECT_EQ(o[j].ran_fallback, u0_turn) << "trial " << j;
+      EXPECT_EQ(o[j].judged_cost, u0_turn ? u0_judged : o[i].judged_cost) << "trial " << j;
+      EXPECT_EQ(o[j].reverted, j == i + 6) << "trial " << j;
+    }
+    EXPECT_GT(o[i].judged_cost, u0_judged) << "trial " << i;
+    i += 6;
+  }
+  EXPECT_GE(accepted, 2);
+  EXPECT_EQ(driver.reverts(), accepted);
+  EXPECT_TRUE(driver.learner()->nominal_is_initial());
+}
+
+// log_cost compares the logarithms of the judged costs: on a deterministic plant (zero spread)
+// every decision is the same as on the costs themselves (the log is increasing), trial for
+// trial. A judged cost that is not positive has no logarithm: the error names the setting.
+TEST_F(TrialDriverTest, TheGuardOnLogCostsDecidesAsOnCostsWithoutSpread) {
+  QuadraticTrackingCost heavy_input(
+      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
+      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
+      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
+  TwoCosts costs(p.cost, heavy_input);
+  Problem problem = p.problem;
+  problem.cost = &costs;
+  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.guard.verify_trials = 3;
+  TrialDriver linear(problem, settings, fallback, nullptr, reference);
+  settings.guard.log_cost = true;
+  TrialDriver logs(problem, settings, fallback, nullptr, reference);
+  Trajectory measured;
+  int reverted = 0;
+  for (int i = 0; i < 40; ++i) {
+    const TrialOutcome a = linear.RunTrial(plant, lq.x0, &measured);
+    const TrialOutcome b = logs.RunTrial(plant, lq.x0, &measured);
+    EXPECT_EQ(a.judged_cost, b.judged_cost) << "trial " << i;  // the cost, not its log
+    EXPECT_EQ(a.accepted, b.accepted) << "trial " << i;
+    EXPECT_EQ(a.reverted, b.reverted) << "trial " << i;
+    EXPECT_EQ(a.ran_fallback, b.ran_fallback) << "trial " << i;
+    reverted += b.reverted ? 1 : 0;
+  }
+  EXPECT_GE(reverted, 2);  // the decisions compared include abandoned laws
+
+  const int n = 2;
+  QuadraticTrackingCost nothing({Matrix::Zero(n, n), Matrix::Zero(n, n)},
+                                {Vector::Zero(n), Vector::Zero(n)},
+                                {Matrix::Zero(1, 1), Matrix::Zero(1, 1)}, {0.0, 0.0},
+                                {Matrix::Zero(n, n), Matrix::Zero(n, n)},
+                                {Vector::Zero(n), Vector::Zero(n)});
+  TwoCosts zero_judged(p.cost, nothing);
+  problem.cost = &zero_judged;
+  auto zero_reference = [&](const Trajectory&, bool for_learner) {
+    zero_judged.judge = !for_learner;
+  };
+  TrialDriver zero(problem, settings, fallback, nullptr, zero_reference);
+  ExpectThrowsWith([&] { zero.RunTrial(plant, lq.x0, &measured); },
+                   "guard.log_cost needs positive judged costs, trial 0 judged 0");
+}
+
+// With the learner's own cost judged, the interleaved guard keeps every accepted law (each is
+// better than the law it replaced, run for run), and the learner decides as without the
+// guard, trial for trial; the runs of the replaced law alternate with the new law's.
+TEST_F(TrialDriverTest, TheInterleavedGuardKeepsEveryLawThatMeasuresBetter) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  TrialDriver unguarded(p.problem, settings, fallback);
+  settings.guard.verify_trials = 2;
+  settings.guard.interleave = true;
+  TrialDriver guarded(p.problem, settings, fallback);
+  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
+  const std::vector<TrialOutcome> b = guarded.Run(plant, lq.x0, 40 + 4 * 12);
+  std::vector<const TrialOutcome*> judged;
+  int old_runs = 0;
+  for (size_t i = 0; i < b.size(); ++i) {
+    if (!b[i].remeasured) judged.push_back(&b[i]);
+    EXPECT_FALSE(b[i].reverted) << "trial " << i;
+    if (b[i].remeasured && i > 0 && b[i - 1].remeasured && b[i].cost > b[i - 1].cost) {
+      ++old_runs;  // the replaced law's run after the new law's: it costs more
+    }
+  }
+  ASSERT_GE(judged.size(), 30u);
+  int accepted = 0;
+  for (size_t i = 0; i < judged.size() && i < a.size(); ++i) {
+    EXPECT_EQ(judged[i]->accepted, a[i].accepted) << "trial " << i;
+    EXPECT_EQ(judged[i]->cost, a[i].cost) << "trial " << i;
+    accepted += a[i].accepted && a[i].learned ? 1 : 0;
+  }
+  EXPECT_GE(accepted, 3);
+  EXPECT_GE(old_runs, 2 * 3) << "the replaced law ran between the new law's re-runs";
+  EXPECT_EQ(guarded.reverts(), 0);
 }
 
 // When the judged cost is the learner's, the guard keeps every law the learner accepts, and on

@@ -1,11 +1,15 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/hopper/hopper_cost.h"
 
+#include <limits>
 #include <random>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include "ddoc/check_derivatives.h"
+#include "ddoc/hopper/hopper_learning.h"
+#include "ddoc/trajectory.h"
 
 namespace ddoc {
 namespace {
@@ -136,6 +140,39 @@ TEST(HopperCostTest, BadInputIsRejected) {
   EXPECT_THROW(HopperCost(model, w), InvalidArgument);
   EXPECT_THROW(cost.Terms(Eigen::VectorXd::Zero(10), Eigen::VectorXd::Zero(10), 0.0),
                InvalidArgument);
+}
+
+// The learner's I1 reference: the trial's own start for reported costs, the anchor (gait
+// takeoff state) for the learner's, and with anchor_weight w the point w anchor + (1 - w) x(0)
+// on the segment between them, computed here coordinate by coordinate.
+TEST(HopperCostTest, TheLearnersReferenceBlendsTheAnchorAndTheHopsStart) {
+  const HopperModel model{HopperParams()};
+  HopperCost cost(model);
+  std::mt19937 rng(11);
+  Trajectory trial;
+  trial.x0 = Random(14, &rng, 1.0);
+  const Eigen::VectorXd anchor = Random(14, &rng, 1.0);
+  for (double w : {0.0, 0.25, 0.9, 1.0}) {
+    const TrialDriver::CostReference ref = HopperCostReference(&cost, anchor, w);
+    ref(trial, false);
+    EXPECT_EQ(Eigen::VectorXd(cost.reference()), trial.x0) << "w " << w;
+    ref(trial, true);
+    for (int i = 0; i < 14; ++i) {
+      EXPECT_NEAR(cost.reference()(i), w * anchor(i) + (1.0 - w) * trial.x0(i), 1e-15)
+          << "w " << w << " coordinate " << i;
+    }
+  }
+  // Without an anchor the weight does nothing: the trial's own start, as (42).
+  HopperCostReference(&cost, Eigen::VectorXd(), 0.5)(trial, true);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), trial.x0);
+  for (double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      HopperCostReference(&cost, anchor, bad);
+      ADD_FAILURE() << "no error for anchor_weight " << bad;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("anchor_weight"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

@@ -54,6 +54,11 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   EXPECT_NE(error.find("pitch_experiment.from_hop = -1, expected >= 0"), std::string::npos)
       << error;
 
+  ControllerConfig bad_anchor;
+  bad_anchor.anchor_weight = 1.5;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_anchor, &error), nullptr);
+  EXPECT_NE(error.find("anchor_weight = 1.5, expected in [0, 1]"), std::string::npos) << error;
+
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
   EXPECT_EQ(HopperController::Create(model.get(), bad_latency, &error), nullptr);

@@ -75,8 +75,10 @@ class HopperPredictionPlant : public Plant {
 /// TrialDriver::CostReference for the hopper: before a trial's cost is evaluated, I1's x_ref is
 /// set to the trial's own start x(0) (the paper's (42)), or, for the costs the learner sees and
 /// when `anchor` is not empty, to `anchor` (e.g. the model gait's takeoff state, so that I1 also
-/// pulls the robot back to the gait; NOT the paper). `cost` must outlive the driver.
-TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector());
+/// pulls the robot back to the gait; NOT the paper), or with `anchor_weight` w < 1 to w anchor +
+/// (1 - w) x(0). `cost` must outlive the driver.
+TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector(),
+                                               double anchor_weight = 1.0);
 
 /// u^0, T^0 of every method (Section V-C): Algorithm 1 run to convergence on the model itself
 /// (`model_plant` as both plants) from the gait's constant input u0 and durations T0; the OC-FB
