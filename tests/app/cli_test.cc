@@ -331,6 +331,62 @@ TEST_F(CliTest, MotorStrengthVariantsScaleWhatTheMotorsDeliver) {
   EXPECT_NE(bad.output.find("leg_gain=0, expected > 0"), std::string::npos) << bad.output;
 }
 
+// The harm guard on the robot of issue 45 (the default robot with a hip motor that delivers 80 %
+// of the commanded torque, which the model does not know). Without the guard Algorithm 1 keeps a
+// law whose hops cost (42) several times OC-FB's (the premise: the harm the guard is for); the
+// guard on log costs (`verify_hops="3" verify_log="on"`) abandons it (hops.csv `reverted`) and
+// hops 40-49 cost at most 1.10x OC-FB's.
+TEST_F(CliTest, TheGuardOnLogCostsLeavesTheLawAWeakHipMotorMakesHarmful) {
+  const std::string learning = "<learning verify_hops=\"3\" verify_log=\"on\"/>";
+  {
+    std::ofstream f(dir_ / "guard.xml");
+    f << "<ddoc_scenario name=\"guard\"><robot mjcf=\"" << DDOC_MODELS_DIR
+      << "/hopper_m8.xml\"/><model M=\"10\" c_d=\"0\"/><method name=\"alg1\"/>"
+      << "<gait speed=\"0.5\"/>" << learning << "</ddoc_scenario>\n";
+  }
+  const std::string flags = " --hops 50 -q --robot-variant hip_gain=0.8";
+  // Mean cost of hops 40-49 and the reverts, from hops.csv (cost: column 4, reverted: by name).
+  auto measure = [&](const std::string& sub, int* reverts) {
+    std::istringstream in(ReadFile(dir_ / sub / "hops.csv"));
+    std::string line;
+    std::getline(in, line);
+    std::vector<std::string> header;
+    for (std::istringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+    const size_t col = std::find(header.begin(), header.end(), "reverted") - header.begin();
+    EXPECT_LT(col, header.size()) << "hops.csv has a reverted column";
+    double sum = 0;
+    int n = 0;
+    *reverts = 0;
+    while (std::getline(in, line)) {
+      std::vector<std::string> f;
+      for (std::istringstream r(line); std::getline(r, line, ',');) f.push_back(line);
+      if (f.size() <= col) continue;
+      *reverts += f[col] == "1" ? 1 : 0;
+      const int hop = std::stoi(f[0]);
+      if (hop >= 40 && hop < 50) {
+        sum += std::stod(f[3]);
+        ++n;
+      }
+    }
+    EXPECT_EQ(n, 10) << sub;
+    return sum / std::max(n, 1);
+  };
+  const Result ocfb = RunCli(Scenario("default.xml") + flags + " --method ocfb --out " + Out("ocfb"));
+  ASSERT_EQ(ocfb.code, 0) << ocfb.output;
+  const Result plain = RunCli(Scenario("default.xml") + flags + " --out " + Out("plain"));
+  ASSERT_EQ(plain.code, 0) << plain.output;
+  const Result guard = RunCli((dir_ / "guard.xml").string() + flags + " --out " + Out("guard"));
+  ASSERT_EQ(guard.code, 0) << guard.output;
+  int reverts = 0;
+  const double c_ocfb = measure("ocfb", &reverts);
+  const double c_plain = measure("plain", &reverts);
+  EXPECT_EQ(reverts, 0);
+  ASSERT_GT(c_plain, 3.0 * c_ocfb) << "premise: without the guard the harm is kept";
+  const double c_guard = measure("guard", &reverts);
+  EXPECT_GE(reverts, 1);
+  EXPECT_LE(c_guard, 1.10 * c_ocfb) << "plain " << c_plain;
+}
+
 TEST_F(CliTest, RobotVariantsWorkFromAnywhere) {
   const std::string run = Scenario("default.xml") + " --hops 2 -q";
   const Result shipped = RunCli(run + " --out " + Out("shipped") + " --robot " +
