@@ -46,6 +46,46 @@ std::vector<double> AcceptedCosts(const std::vector<TrialOutcome>& outcomes) {
 }
 
 // The exact two-mode LQ problem, its plant and u^0 = 0 as the fallback law.
+// The guarded run's learning trials (`judged`, re-runs left out) decide as the unguarded run's
+// (`a`), trial for trial; returns the accepted learning trials.
+int ExpectSameDecisions(const std::vector<const TrialOutcome*>& judged,
+                        const std::vector<TrialOutcome>& a) {
+  int accepted = 0;
+  for (size_t i = 0; i < judged.size() && i < a.size(); ++i) {
+    EXPECT_EQ(judged[i]->accepted, a[i].accepted) << "trial " << i;
+    EXPECT_EQ(judged[i]->cost, a[i].cost) << "trial " << i;
+    accepted += a[i].accepted && a[i].learned ? 1 : 0;
+  }
+  return accepted;
+}
+
+// Every accepted learning trial i of `o` is followed by 6 re-runs (k = 1..6: u^0's where
+// u0_turn(k), else the accepted law's, each judged as that law judges from x0) and abandoned
+// after the sixth; returns the accepted learning trials.
+int ExpectEveryAcceptedLawAbandoned(const std::vector<TrialOutcome>& o, double u0_judged,
+                                    const std::function<bool(size_t)>& u0_turn) {
+  int accepted = 0;
+  for (size_t i = 1; i < o.size(); ++i) {
+    if (!o[i].learned || !o[i].accepted) continue;
+    if (i + 6 >= o.size()) {
+      ADD_FAILURE() << "trial " << i << " accepted without its 6 re-runs";
+      break;
+    }
+    ++accepted;
+    for (size_t j = i + 1; j <= i + 6; ++j) {
+      const bool u0 = u0_turn(j - i);
+      EXPECT_TRUE(o[j].remeasured) << "trial " << j;
+      EXPECT_FALSE(o[j].learned) << "trial " << j;
+      EXPECT_EQ(o[j].ran_fallback, u0) << "trial " << j;
+      EXPECT_EQ(o[j].judged_cost, u0 ? u0_judged : o[i].judged_cost) << "trial " << j;
+      EXPECT_EQ(o[j].reverted, j == i + 6) << "trial " << j;
+    }
+    EXPECT_GT(o[i].judged_cost, u0_judged) << "trial " << i;
+    i += 6;
+  }
+  return accepted;
+}
+
 class TrialDriverTest : public ::testing::Test {
  protected:
   TwoModeLq lq;
@@ -530,6 +570,34 @@ class TwoCosts : public SwitchedCost {
   const SwitchedCost& judged_;
 };
 
+// The judged cost of the guard tests: the learner's with the input weighed 60x (r = 30). Every
+// law the learner accepts uses input that u^0 = 0 does not, so it lowers the learner's cost and
+// raises the judged one. `problem` has the two costs; `reference` switches them as a
+// CostReference; Judged evaluates the judged one.
+struct HeavyInputJudged {
+  HeavyInputJudged(const TwoModeLq& lq, const LqProblem& p)
+      : heavy_input({Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
+                    {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)},
+                    {lq.rho0, lq.rho1}, {Matrix::Zero(2, 2), Matrix(lq.S)},
+                    {Vector::Zero(2), Vector::Zero(2)}),
+        costs(p.cost, heavy_input),
+        problem(p.problem) {
+    problem.cost = &costs;
+  }
+  TrialDriver::CostReference reference() {
+    return [this](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  }
+  double Judged(const Trajectory& t) {
+    costs.judge = true;
+    const double c = EvaluateCost(problem, t).total;
+    costs.judge = false;
+    return c;
+  }
+  QuadraticTrackingCost heavy_input;
+  TwoCosts costs;
+  Problem problem;
+};
+
 // The judged cost is the learner's with the input weighed 60x (r = 30): every law the learner
 // accepts uses input that u^0 = 0 does not, so it lowers the learner's cost and raises the
 // judged one. Without the guard the learner keeps such laws (checked first: the test's premise);
@@ -537,20 +605,10 @@ class TwoCosts : public SwitchedCost {
 // worse than u^0, u^0 is run again, and the law is abandoned; the learner goes on from u^0's
 // nominal, and no law it keeps judges worse than u^0.
 TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialLaw) {
-  QuadraticTrackingCost heavy_input(
-      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
-      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
-      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
-  TwoCosts costs(p.cost, heavy_input);
-  Problem problem = p.problem;
-  problem.cost = &costs;
-  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
-  auto judged = [&](const Trajectory& t) {
-    costs.judge = true;
-    const double c = EvaluateCost(problem, t).total;
-    costs.judge = false;
-    return c;
-  };
+  HeavyInputJudged h(lq, p);
+  const Problem& problem = h.problem;
+  const TrialDriver::CostReference reference = h.reference();
+  auto judged = [&](const Trajectory& t) { return h.Judged(t); };
   Trajectory measured;
   plant.Run(lq.x0, fallback, &measured);
   const double u0_judged = judged(measured);
@@ -572,23 +630,10 @@ TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialL
     o.push_back(driver.RunTrial(plant, lq.x0, &measured));
     EXPECT_EQ(o.back().judged_cost, judged(measured)) << "trial " << i;
   }
-  int accepted = 0;
-  for (size_t i = 1; i < o.size(); ++i) {
-    if (!o[i].learned || !o[i].accepted) continue;
-    ASSERT_LT(i + 6, o.size());
-    ++accepted;
-    // The accepted law runs 3 times more (the same law from the same start: the same cost);
-    // worse than u^0's Initialize trial, u^0 runs 3 times again, and the accepted law is
-    // abandoned after the last.
-    for (size_t j = i + 1; j <= i + 6; ++j) {
-      EXPECT_TRUE(o[j].remeasured) << "trial " << j;
-      EXPECT_FALSE(o[j].learned) << "trial " << j;
-      EXPECT_EQ(o[j].ran_fallback, j > i + 3) << "trial " << j;
-      EXPECT_EQ(o[j].judged_cost, j <= i + 3 ? o[i].judged_cost : u0_judged) << "trial " << j;
-      EXPECT_EQ(o[j].reverted, j == i + 6) << "trial " << j;
-    }
-    EXPECT_GT(o[i].judged_cost, u0_judged) << "trial " << i;
-  }
+  // The accepted law runs 3 times more (the same law from the same start: the same cost);
+  // worse than u^0's Initialize trial, u^0 runs 3 times again, and the accepted law is
+  // abandoned after the last.
+  const int accepted = ExpectEveryAcceptedLawAbandoned(o, u0_judged, [](size_t k) { return k > 3; });
   EXPECT_GE(accepted, 2);
   EXPECT_EQ(driver.reverts(), accepted);
   EXPECT_TRUE(driver.learner()->nominal_is_initial());
@@ -600,19 +645,12 @@ TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialL
 // number on this deterministic plant (zero spread), so the law is abandoned after the sixth run
 // and the learner goes on from u^0's nominal.
 TEST_F(TrialDriverTest, TheInterleavedGuardAbandonsALawThatMeasuresWorseThanTheInitialLaw) {
-  QuadraticTrackingCost heavy_input(
-      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
-      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
-      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
-  TwoCosts costs(p.cost, heavy_input);
-  Problem problem = p.problem;
-  problem.cost = &costs;
-  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  HeavyInputJudged h(lq, p);
+  const Problem& problem = h.problem;
+  const TrialDriver::CostReference reference = h.reference();
   Trajectory measured;
   plant.Run(lq.x0, fallback, &measured);
-  costs.judge = true;
-  const double u0_judged = EvaluateCost(problem, measured).total;
-  costs.judge = false;
+  const double u0_judged = h.Judged(measured);
 
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
@@ -622,22 +660,8 @@ TEST_F(TrialDriverTest, TheInterleavedGuardAbandonsALawThatMeasuresWorseThanTheI
   for (int i = 0; i < 40 || driver.verifying() > 0; ++i) {
     o.push_back(driver.RunTrial(plant, lq.x0, &measured));
   }
-  int accepted = 0;
-  for (size_t i = 1; i < o.size(); ++i) {
-    if (!o[i].learned || !o[i].accepted) continue;
-    ASSERT_LT(i + 6, o.size());
-    ++accepted;
-    for (size_t j = i + 1; j <= i + 6; ++j) {
-      const bool u0_turn = (j - i) % 2 == 0;
-      EXPECT_TRUE(o[j].remeasured) << "trial " << j;
-      EXPECT_FALSE(o[j].learned) << "trial " << j;
-      EXPECT_EQ(o[j].ran_fallback, u0_turn) << "trial " << j;
-      EXPECT_EQ(o[j].judged_cost, u0_turn ? u0_judged : o[i].judged_cost) << "trial " << j;
-      EXPECT_EQ(o[j].reverted, j == i + 6) << "trial " << j;
-    }
-    EXPECT_GT(o[i].judged_cost, u0_judged) << "trial " << i;
-    i += 6;
-  }
+  const int accepted =
+      ExpectEveryAcceptedLawAbandoned(o, u0_judged, [](size_t k) { return k % 2 == 0; });
   EXPECT_GE(accepted, 2);
   EXPECT_EQ(driver.reverts(), accepted);
   EXPECT_TRUE(driver.learner()->nominal_is_initial());
@@ -647,14 +671,9 @@ TEST_F(TrialDriverTest, TheInterleavedGuardAbandonsALawThatMeasuresWorseThanTheI
 // every decision is the same as on the costs themselves (the log is increasing), trial for
 // trial. A judged cost that is not positive has no logarithm: the error names the setting.
 TEST_F(TrialDriverTest, TheGuardOnLogCostsDecidesAsOnCostsWithoutSpread) {
-  QuadraticTrackingCost heavy_input(
-      {Matrix(lq.Q0), Matrix(lq.Q1)}, {Vector::Zero(2), Vector::Zero(2)},
-      {Matrix::Constant(1, 1, 60 * lq.r), Matrix::Constant(1, 1, 60 * lq.r)}, {lq.rho0, lq.rho1},
-      {Matrix::Zero(2, 2), Matrix(lq.S)}, {Vector::Zero(2), Vector::Zero(2)});
-  TwoCosts costs(p.cost, heavy_input);
-  Problem problem = p.problem;
-  problem.cost = &costs;
-  auto reference = [&](const Trajectory&, bool for_learner) { costs.judge = !for_learner; };
+  HeavyInputJudged h(lq, p);
+  const Problem& problem = h.problem;
+  const TrialDriver::CostReference reference = h.reference();
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
   TrialDriver linear(problem, settings, fallback, nullptr, reference);
@@ -680,11 +699,12 @@ TEST_F(TrialDriverTest, TheGuardOnLogCostsDecidesAsOnCostsWithoutSpread) {
                                 {Matrix::Zero(n, n), Matrix::Zero(n, n)},
                                 {Vector::Zero(n), Vector::Zero(n)});
   TwoCosts zero_judged(p.cost, nothing);
-  problem.cost = &zero_judged;
+  Problem zero_problem = p.problem;
+  zero_problem.cost = &zero_judged;
   auto zero_reference = [&](const Trajectory&, bool for_learner) {
     zero_judged.judge = !for_learner;
   };
-  TrialDriver zero(problem, settings, fallback, nullptr, zero_reference);
+  TrialDriver zero(zero_problem, settings, fallback, nullptr, zero_reference);
   ExpectThrowsWith([&] { zero.RunTrial(plant, lq.x0, &measured); },
                    "guard.log_cost needs positive judged costs, trial 0 judged 0");
 }
@@ -710,13 +730,7 @@ TEST_F(TrialDriverTest, TheInterleavedGuardKeepsEveryLawThatMeasuresBetter) {
     }
   }
   ASSERT_GE(judged.size(), 30u);
-  int accepted = 0;
-  for (size_t i = 0; i < judged.size() && i < a.size(); ++i) {
-    EXPECT_EQ(judged[i]->accepted, a[i].accepted) << "trial " << i;
-    EXPECT_EQ(judged[i]->cost, a[i].cost) << "trial " << i;
-    accepted += a[i].accepted && a[i].learned ? 1 : 0;
-  }
-  EXPECT_GE(accepted, 3);
+  EXPECT_GE(ExpectSameDecisions(judged, a), 3);
   EXPECT_GE(old_runs, 2 * 3) << "the replaced law ran between the new law's re-runs";
   EXPECT_EQ(guarded.reverts(), 0);
 }
@@ -737,13 +751,7 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
     EXPECT_FALSE(o.reverted) << "trial " << o.trial;
   }
   ASSERT_GE(judged.size(), 30u);
-  int accepted = 0;
-  for (size_t i = 0; i < judged.size() && i < a.size(); ++i) {
-    EXPECT_EQ(judged[i]->accepted, a[i].accepted) << "trial " << i;
-    EXPECT_EQ(judged[i]->cost, a[i].cost) << "trial " << i;
-    accepted += a[i].accepted && a[i].learned ? 1 : 0;
-  }
-  EXPECT_GE(accepted, 3);
+  EXPECT_GE(ExpectSameDecisions(judged, a), 3);
   EXPECT_EQ(guarded.reverts(), 0);
 }
 
