@@ -218,6 +218,14 @@ class TrialDriver {
     double mean() const { return sum / n; }
     void Add(double x);
   };
+  // Squared deviations pooled over finished runs, and their degrees of freedom.
+  struct PooledSpread {
+    double ss = 0;
+    int df = 0;
+    void Add(const Runs& runs);  // runs of fewer than 2 or a non-finite ss add nothing
+    // The spread s of the pooled runs with a's (and b's) added (0 without degrees of freedom).
+    double With(const Runs& a, const Runs* b = nullptr) const;
+  };
   enum class Phase { kNone, kVerify, kChallenge };  // what the guard's runs are
   enum class Target { kInitial, kKept, kPrevious };  // a law the guard may go back to
   // The guard's part of CompleteTrial: a re-run of the accepted law or of the law it is
@@ -232,7 +240,8 @@ class TrialDriver {
   double Compared(double judged) const;  // what the comparisons use: judged, or its log
   // a's mean judged cost exceeds b's by more than margin standard errors.
   bool WorseThan(const Runs& a, const Runs& b) const;
-  void Pool(const Runs& runs);  // adds a finished law's runs to the pooled spread
+  void Pool(const Runs& runs) { pooled_.Add(runs); }  // a finished law's runs
+  void RunLaw(Target t);  // the law of target t runs next (u^0: the fallback)
   // interleave: one run of the alternation, and the decision after the last.
   TrialOutcome& Interleaved(double judged, TrialOutcome& out);
   void Abandon(TrialOutcome& out);  // back to target_'s checkpoint, the learner goes on
@@ -249,15 +258,13 @@ class TrialDriver {
   Runs initial_runs_, kept_runs_, previous_runs_;
   std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
   int window_count_ = 0;
-  double pooled_ss_ = 0;       // within-law squared deviations of every finished law
-  int pooled_df_ = 0;
+  PooledSpread pooled_;        // within-law deviations of every finished law's runs
   OnlineController* pending_law_ = nullptr;  // the learner's next trial, waiting for the guard
   int reverts_ = 0;
   bool new_turn_ = true;            // interleave: the next run is the law on trial's
-  std::vector<double> pair_new_;    // interleave: judged costs of the law on trial's runs
+  double pair_new_ = 0;             // interleave: the law on trial's last judged cost
   Runs pair_diffs_;                 // interleave: this comparison's paired differences
-  double pooled_diff_ss_ = 0;       // interleave: squared deviations of every comparison's
-  int pooled_diff_df_ = 0;          // paired differences, and their degrees of freedom
+  PooledSpread pooled_diffs_;       // interleave: every finished comparison's differences
   int runs_ = 0;              // runs of the current law so far (runs_per_trial)
   double run_cost_sum_ = 0;   // their measured costs
 };

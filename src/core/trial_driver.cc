@@ -74,15 +74,12 @@ void TrialDriver::Reset() {
   window_count_ = 0;
   new_learner_sum_ = 0;
   initial_ = kept_ = previous_ = LearnerCheckpoint{};
-  pooled_ss_ = 0;
-  pooled_df_ = 0;
+  pooled_ = PooledSpread{};
   pending_law_ = nullptr;
   reverts_ = 0;
   new_turn_ = true;
-  pair_new_.clear();
   pair_diffs_ = Runs{};
-  pooled_diff_ss_ = 0;
-  pooled_diff_df_ = 0;
+  pooled_diffs_ = PooledSpread{};
   UseFallback();
 }
 
@@ -119,17 +116,33 @@ double TrialDriver::Compared(double judged) const {
 bool TrialDriver::WorseThan(const Runs& a, const Runs& b) const {
   if (a.n == 0 || b.n == 0) return false;
   // The spread pooled over every finished law's runs and these two.
-  const double ss = pooled_ss_ + a.ss + b.ss;
-  const int df = pooled_df_ + a.n - 1 + b.n - 1;
-  const double spread = df > 0 && std::isfinite(ss) ? std::sqrt(ss / df) : 0.0;
+  const double spread = pooled_.With(a, &b);
   const double se = spread * std::sqrt(1.0 / a.n + 1.0 / b.n);
   return !(a.mean() <= b.mean() + settings_.guard.margin * se);
 }
 
-void TrialDriver::Pool(const Runs& runs) {
+void TrialDriver::PooledSpread::Add(const Runs& runs) {
   if (runs.n < 2 || !std::isfinite(runs.ss)) return;
-  pooled_ss_ += runs.ss;
-  pooled_df_ += runs.n - 1;
+  ss += runs.ss;
+  df += runs.n - 1;
+}
+
+double TrialDriver::PooledSpread::With(const Runs& a, const Runs* b) const {
+  double total = ss + a.ss;
+  int dof = df + a.n - 1;
+  if (b != nullptr) {
+    total += b->ss;
+    dof += b->n - 1;
+  }
+  return dof > 0 && std::isfinite(total) ? std::sqrt(total / dof) : 0.0;
+}
+
+void TrialDriver::RunLaw(Target t) {
+  if (t == Target::kInitial) {
+    UseFallback();
+  } else {
+    UseLearnedLaw(t == Target::kKept ? kept_.law : previous_.law);
+  }
 }
 
 const LearnerCheckpoint& TrialDriver::Checkpoint(Target t) const {
@@ -148,11 +161,7 @@ void TrialDriver::Challenge(Target against, bool watch) {
   phase_ = Phase::kChallenge;
   other_runs_ = Runs{};
   verify_left_ = settings_.guard.verify_trials;
-  if (against == Target::kInitial) {
-    UseFallback();
-  } else {
-    UseLearnedLaw(against == Target::kKept ? kept_.law : previous_.law);
-  }
+  RunLaw(against);
 }
 
 void TrialDriver::Watch(double judged) {
@@ -252,25 +261,23 @@ void TrialDriver::Abandon(TrialOutcome& out) {
 }
 
 TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
-  // Runs alternate: the law on trial (new_turn_), then the law it replaced, and so on; the k-th
-  // paired difference is the k-th run of the first minus the k-th of the second.
+  // Runs alternate: the law on trial (new_turn_), then the law it replaced, and so on; each
+  // paired difference is a run of the first minus the run of the second that follows it.
   if (new_turn_) {
     new_runs_.Add(judged);
     new_learner_sum_ += out.cost;
-    pair_new_.push_back(judged);
+    pair_new_ = judged;
   } else {
     other_runs_.Add(judged);
-    pair_diffs_.Add(pair_new_[static_cast<size_t>(other_runs_.n - 1)] - judged);
+    pair_diffs_.Add(pair_new_ - judged);
   }
   const bool fell = new_turn_ && !std::isfinite(judged);  // the law on trial is out at once
   if (--verify_left_ > 0 && !fell) {
     new_turn_ = !new_turn_;
     if (new_turn_) {
       UseLearnedLaw(learner_->nominal_law());
-    } else if (target_ == Target::kInitial) {
-      UseFallback();
     } else {
-      UseLearnedLaw(kept_.law);
+      RunLaw(target_);
     }
     return out;
   }
@@ -281,17 +288,11 @@ TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
     // Mean difference against margin standard errors of it, the spread of the differences
     // pooled over this comparison and the run's earlier ones.
     const Runs& d = pair_diffs_;
-    const double ss = pooled_diff_ss_ + d.ss;
-    const int df = pooled_diff_df_ + d.n - 1;
-    const double spread = df > 0 && std::isfinite(ss) ? std::sqrt(ss / df) : 0.0;
+    const double spread = pooled_diffs_.With(d);
     worse = !(d.mean() <= settings_.guard.margin * spread / std::sqrt(d.n));
-    if (d.n >= 2 && std::isfinite(d.ss)) {
-      pooled_diff_ss_ += d.ss;
-      pooled_diff_df_ += d.n - 1;
-    }
+    pooled_diffs_.Add(d);
   }
   if (other_runs_.n > 0) RunsOf(target_) = other_runs_;
-  pair_new_.clear();
   pair_diffs_ = Runs{};
   other_runs_ = Runs{};
   if (worse) {
@@ -424,7 +425,6 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
         verify_left_ *= 2;  // as many runs of the replaced law, alternating
         target_ = kept_.valid ? Target::kKept : Target::kInitial;
         new_turn_ = true;
-        pair_new_.clear();
         pair_diffs_ = Runs{};
         other_runs_ = Runs{};
       }

@@ -371,7 +371,8 @@ TEST_F(CliTest, TheGuardOnLogCostsLeavesTheLawAWeakHipMotorMakesHarmful) {
     EXPECT_EQ(n, 10) << sub;
     return sum / std::max(n, 1);
   };
-  const Result ocfb = RunCli(Scenario("default.xml") + flags + " --method ocfb --out " + Out("ocfb"));
+  const Result ocfb =
+      RunCli(Scenario("default.xml") + flags + " --method ocfb --out " + Out("ocfb"));
   ASSERT_EQ(ocfb.code, 0) << ocfb.output;
   const Result plain = RunCli(Scenario("default.xml") + flags + " --out " + Out("plain"));
   ASSERT_EQ(plain.code, 0) << plain.output;

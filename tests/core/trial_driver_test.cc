@@ -633,7 +633,8 @@ TEST_F(TrialDriverTest, TheHarmGuardAbandonsALawThatMeasuresWorseThanTheInitialL
   // The accepted law runs 3 times more (the same law from the same start: the same cost);
   // worse than u^0's Initialize trial, u^0 runs 3 times again, and the accepted law is
   // abandoned after the last.
-  const int accepted = ExpectEveryAcceptedLawAbandoned(o, u0_judged, [](size_t k) { return k > 3; });
+  const int accepted =
+      ExpectEveryAcceptedLawAbandoned(o, u0_judged, [](size_t k) { return k > 3; });
   EXPECT_GE(accepted, 2);
   EXPECT_EQ(driver.reverts(), accepted);
   EXPECT_TRUE(driver.learner()->nominal_is_initial());
