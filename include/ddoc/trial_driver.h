@@ -57,6 +57,10 @@ struct HarmGuardSettings {
   /// run-to-run spread grows with its size; TrialOutcome::judged_cost stays the cost itself).
   /// A judged cost <= 0 then throws InvalidArgument. Default false.
   bool log_cost = false;
+  /// true: an accepted law re-runs only when its trial's judged cost exceeds the mean judged
+  /// cost of the law it replaced or of u^0 (the reported cost contradicts the learner's
+  /// acceptance); otherwise it is kept on that one run and learning goes on. Default false.
+  bool only_when_worse = false;
 };
 
 /// Settings of TrialDriver.
@@ -236,6 +240,9 @@ class TrialDriver {
   // Runs `against` verify_trials times to compare the law on trial (new_runs_) with it.
   void Challenge(Target against, bool watch);
   void KeepNew();  // the accepted law passed: it becomes the kept law
+  // HarmGuardSettings::only_when_worse: true (and the law kept) when the accepted trial's
+  // judged cost is no higher than the replaced law's and u^0's.
+  bool ReportAgrees(double judged_cost, double learner_cost);
   double JudgedCost(const Trajectory& measured, bool learns);
   double Compared(double judged) const;  // what the comparisons use: judged, or its log
   // a's mean judged cost exceeds b's by more than margin standard errors.

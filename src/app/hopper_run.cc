@@ -121,6 +121,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.verify_debias) config.driver.guard.debias = *l.verify_debias;
   if (l.verify_interleave) config.driver.guard.interleave = *l.verify_interleave;
   if (l.verify_log) config.driver.guard.log_cost = *l.verify_log;
+  if (l.verify_when_worse) config.driver.guard.only_when_worse = *l.verify_when_worse;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.start_correction) learner.start_correction = *l.start_correction;

@@ -107,7 +107,7 @@ const std::vector<ElementSpec>& Elements() {
         Text("blend_feedback"), Text("start_correction"),
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
         Number("verify_margin", kNonNegative), Text("verify_debias"), Text("verify_interleave"),
-        Text("verify_log"), Integer("watch_hops", 0),
+        Text("verify_log"), Text("verify_when"), Integer("watch_hops", 0),
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
@@ -314,6 +314,9 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
     l->verify_interleave = *v == "on";
   }
   if (auto v = GetChoice(path, e, "verify_log", "off", "on")) l->verify_log = *v == "on";
+  if (auto v = GetChoice(path, e, "verify_when", "always", "worse")) {
+    l->verify_when_worse = *v == "worse";
+  }
   l->curvature_scale_min = GetNumber(path, e, "curvature_scale_min");
 }
 

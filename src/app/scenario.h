@@ -69,6 +69,7 @@ struct LearningOverrides {
   std::optional<bool> verify_debias;    // HarmGuardSettings::debias
   std::optional<bool> verify_interleave;  // HarmGuardSettings::interleave
   std::optional<bool> verify_log;       // HarmGuardSettings::log_cost
+  std::optional<bool> verify_when_worse;  // HarmGuardSettings::only_when_worse
   std::optional<double> curvature_scale_min;  // LearnerSettings::curvature_scale_min, (0, 1]
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
   std::optional<bool> start_correction;  // "on"/"off": LearnerSettings::start_correction

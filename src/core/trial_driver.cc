@@ -37,6 +37,10 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
                           std::to_string(settings.guard.watch_trials) +
                           ", expected 0 (no watch) or >= 2");
   }
+  if (settings.guard.only_when_worse && settings.guard.verify_trials == 0) {
+    throw InvalidArgument("TrialDriverSettings: guard.only_when_worse needs guard.verify_trials "
+                          ">= 2 (verify_trials = 0)");
+  }
   if (settings.guard.interleave &&
       (settings.guard.verify_trials == 0 || settings.guard.watch_trials != 0)) {
     throw InvalidArgument("TrialDriverSettings: guard.interleave needs guard.verify_trials >= 2 "
@@ -303,6 +307,24 @@ TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
   return out;
 }
 
+bool TrialDriver::ReportAgrees(double judged_cost, double learner_cost) {
+  // only_when_worse: the accepted trial's own judged cost, no higher than the replaced law's
+  // and u^0's means, keeps the law on that one run.
+  if (!settings_.guard.only_when_worse || !std::isfinite(judged_cost)) return false;
+  const double judged = Compared(judged_cost);
+  const Runs& replaced = RunsOf(kept_.valid ? Target::kKept : Target::kInitial);
+  if ((replaced.n > 0 && judged > replaced.mean()) ||
+      (initial_runs_.n > 0 && judged > initial_runs_.mean())) {
+    return false;
+  }
+  new_runs_ = Runs{};
+  new_runs_.Add(judged);
+  new_learner_sum_ = learner_cost;
+  pending_law_ = learned_;
+  KeepNew();
+  return true;
+}
+
 void TrialDriver::KeepNew() {
   // Kept: its cost is the mean of the re-runs, free of the selection that accepted it; the law
   // it replaced is remembered.
@@ -415,7 +437,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     const bool replay =
         learner_->status() == LearnerStatus::kLineSearchFailed || learner_->remeasuring();
     if (replay && learner_->nominal_is_initial()) UseFallback();
-    if (guard && r.accepted) {
+    if (guard && r.accepted && !ReportAgrees(out.judged_cost, out.cost)) {
       // The harm guard: the accepted law runs again before it is kept; the learner's next
       // trial waits.
       pending_law_ = learned_;

@@ -210,16 +210,20 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   // The harm guard's interleaved comparison (off by default) and the anchor weight.
   EXPECT_FALSE(c.driver.guard.interleave);
   EXPECT_FALSE(c.driver.guard.log_cost);
+  EXPECT_FALSE(c.driver.guard.only_when_worse);
   EXPECT_DOUBLE_EQ(c.anchor_weight, 1.0);
   c = ControllerConfigFor(
-      LoadScenario(Write(Fill(
-          fmt, "verify_hops='3' verify_interleave='on' verify_log='on' anchor_weight='0.8'"))),
+      LoadScenario(Write(Fill(fmt, "verify_hops='3' verify_interleave='on' verify_log='on' "
+                                   "verify_when='worse' anchor_weight='0.8'"))),
       HopperParams());
   EXPECT_TRUE(c.driver.guard.interleave);
   EXPECT_TRUE(c.driver.guard.log_cost);
+  EXPECT_TRUE(c.driver.guard.only_when_worse);
   EXPECT_EQ(c.driver.guard.verify_trials, 3);
   EXPECT_DOUBLE_EQ(c.anchor_weight, 0.8);
   ExpectError(Fill(fmt, "verify_interleave='2'"), {"verify_interleave=\"2\"", "off or on"});
+  ExpectError(Fill(fmt, "verify_when='sometimes'"),
+              {"verify_when=\"sometimes\"", "always or worse"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

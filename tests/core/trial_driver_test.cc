@@ -537,6 +537,10 @@ TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
   interleave.guard.watch_trials = 3;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, interleave, fallback); },
                    "(verify_trials = 3, watch_trials = 3)");
+  TrialDriverSettings worse = DriverSettings(Method::kAlg1);
+  worse.guard.only_when_worse = true;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, worse, fallback); },
+                   "guard.only_when_worse needs guard.verify_trials >= 2 (verify_trials = 0)");
 }
 
 // A cost that is one of two quadratic costs: the learner's (judge = false) or the one the
@@ -754,6 +758,47 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
   ASSERT_GE(judged.size(), 30u);
   EXPECT_GE(ExpectSameDecisions(judged, a), 3);
   EXPECT_EQ(guarded.reverts(), 0);
+}
+
+// only_when_worse re-runs an accepted law only when its trial's judged cost is above the
+// replaced law's or u^0's. With the learner's own cost judged every accepted trial agrees with
+// the acceptance: no re-run at all, and the run is the unguarded run, trial for trial. With the
+// input weighed 60x in the judged cost every accepted trial contradicts it: each is re-run and
+// abandoned as by the guard that always re-runs, trial for trial.
+TEST_F(TrialDriverTest, TheGuardOnlyWhenWorseReRunsTheLawsTheReportedCostContradicts) {
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  TrialDriver unguarded(p.problem, settings, fallback);
+  settings.guard.verify_trials = 3;
+  settings.guard.only_when_worse = true;
+  TrialDriver agreeing(p.problem, settings, fallback);
+  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
+  const std::vector<TrialOutcome> b = agreeing.Run(plant, lq.x0, 40);
+  std::vector<const TrialOutcome*> all;
+  for (const TrialOutcome& o : b) {
+    EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
+    all.push_back(&o);
+  }
+  EXPECT_GE(ExpectSameDecisions(all, a), 3);
+  EXPECT_EQ(agreeing.verifying(), 0);
+  EXPECT_EQ(agreeing.reverts(), 0);
+
+  HeavyInputJudged h(lq, p);
+  const TrialDriver::CostReference reference = h.reference();
+  TrialDriverSettings always = DriverSettings(Method::kAlg1);
+  always.guard.verify_trials = 3;
+  TrialDriver every(h.problem, always, fallback, nullptr, reference);
+  TrialDriver contradicted(h.problem, settings, fallback, nullptr, reference);
+  Trajectory measured;
+  for (int i = 0; i < 40; ++i) {
+    const TrialOutcome x = every.RunTrial(plant, lq.x0, &measured);
+    const TrialOutcome y = contradicted.RunTrial(plant, lq.x0, &measured);
+    EXPECT_EQ(x.accepted, y.accepted) << "trial " << i;
+    EXPECT_EQ(x.cost, y.cost) << "trial " << i;
+    EXPECT_EQ(x.remeasured, y.remeasured) << "trial " << i;
+    EXPECT_EQ(x.reverted, y.reverted) << "trial " << i;
+  }
+  EXPECT_GE(contradicted.reverts(), 2);
+  EXPECT_EQ(contradicted.reverts(), every.reverts());
 }
 
 // A kept law that later measures worse: the plant's input gain flips after the learner kept a
