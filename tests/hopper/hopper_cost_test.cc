@@ -51,7 +51,8 @@ TEST(HopperCostTest, DerivativesMatchFiniteDifferences) {
       for (int k = 0; k < 2; ++k) {
         const int n = model.state_dim(k);
         Eigen::VectorXd x = Random(n, &rng, 1.0);
-        x(k == 0 ? hopper::kR : hopper::kSR) = 0.7 + 0.05 * x(0);
+        x(k == 0 ? static_cast<int>(hopper::kR) : static_cast<int>(hopper::kSR)) =
+            0.7 + 0.05 * x(0);
         const Eigen::VectorXd u = Random(4, &rng, 3.0) + Eigen::Vector4d(0, 0, 80, 2000);
         // Running cost.
         Eigen::VectorXd lx(n), lu(4);
