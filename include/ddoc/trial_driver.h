@@ -240,9 +240,9 @@ class TrialDriver {
   // Runs `against` verify_trials times to compare the law on trial (new_runs_) with it.
   void Challenge(Target against, bool watch);
   void KeepNew();  // the accepted law passed: it becomes the kept law
-  // HarmGuardSettings::only_when_worse: true (and the law kept) when the accepted trial's
-  // judged cost is no higher than the replaced law's and u^0's.
-  bool ReportAgrees(double judged_cost, double learner_cost);
+  // HarmGuardSettings::only_when_worse: keeps the accepted law at once and returns true when
+  // its trial's judged cost is no higher than the replaced law's and u^0's.
+  bool KeepIfReportAgrees(double judged_cost, double learner_cost);
   double JudgedCost(const Trajectory& measured, bool learns);
   double Compared(double judged) const;  // what the comparisons use: judged, or its log
   // a's mean judged cost exceeds b's by more than margin standard errors.

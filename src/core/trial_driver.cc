@@ -307,9 +307,9 @@ TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
   return out;
 }
 
-bool TrialDriver::ReportAgrees(double judged_cost, double learner_cost) {
+bool TrialDriver::KeepIfReportAgrees(double judged_cost, double learner_cost) {
   // only_when_worse: the accepted trial's own judged cost, no higher than the replaced law's
-  // and u^0's means, keeps the law on that one run.
+  // and u^0's means, keeps the law on that one run (true); else the re-runs follow (false).
   if (!settings_.guard.only_when_worse || !std::isfinite(judged_cost)) return false;
   const double judged = Compared(judged_cost);
   const Runs& replaced = RunsOf(kept_.valid ? Target::kKept : Target::kInitial);
@@ -437,7 +437,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     const bool replay =
         learner_->status() == LearnerStatus::kLineSearchFailed || learner_->remeasuring();
     if (replay && learner_->nominal_is_initial()) UseFallback();
-    if (guard && r.accepted && !ReportAgrees(out.judged_cost, out.cost)) {
+    if (guard && r.accepted && !KeepIfReportAgrees(out.judged_cost, out.cost)) {
       // The harm guard: the accepted law runs again before it is kept; the learner's next
       // trial waits.
       pending_law_ = learned_;

@@ -45,7 +45,6 @@ std::vector<double> AcceptedCosts(const std::vector<TrialOutcome>& outcomes) {
   return costs;
 }
 
-// The exact two-mode LQ problem, its plant and u^0 = 0 as the fallback law.
 // The guarded run's learning trials (`judged`, re-runs left out) decide as the unguarded run's
 // (`a`), trial for trial; returns the accepted learning trials.
 int ExpectSameDecisions(const std::vector<const TrialOutcome*>& judged,
@@ -86,8 +85,31 @@ int ExpectEveryAcceptedLawAbandoned(const std::vector<TrialOutcome>& o, double u
   return accepted;
 }
 
+// The same exact problem run by Algorithm 1 without and with a guard.
+struct GuardedRuns {
+  std::vector<TrialOutcome> unguarded, guarded;
+  int reverts = 0;    // the guarded driver's
+  int verifying = 0;  // the guarded driver's re-runs left at the end
+};
+
+// The exact two-mode LQ problem, its plant and u^0 = 0 as the fallback law.
 class TrialDriverTest : public ::testing::Test {
  protected:
+  // `trials` trials without a guard, `guarded_trials` with `guard`.
+  GuardedRuns RunWithAndWithoutGuard(const HarmGuardSettings& guard, int trials,
+                                     int guarded_trials) {
+    TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+    TrialDriver unguarded(p.problem, settings, fallback);
+    settings.guard = guard;
+    TrialDriver guarded(p.problem, settings, fallback);
+    GuardedRuns r;
+    r.unguarded = unguarded.Run(plant, lq.x0, trials);
+    r.guarded = guarded.Run(plant, lq.x0, guarded_trials);
+    r.reverts = guarded.reverts();
+    r.verifying = guarded.verifying();
+    return r;
+  }
+
   TwoModeLq lq;
   LqProblem p{lq};
   ModelPlant plant{p.problem};
@@ -718,13 +740,12 @@ TEST_F(TrialDriverTest, TheGuardOnLogCostsDecidesAsOnCostsWithoutSpread) {
 // better than the law it replaced, run for run), and the learner decides as without the
 // guard, trial for trial; the runs of the replaced law alternate with the new law's.
 TEST_F(TrialDriverTest, TheInterleavedGuardKeepsEveryLawThatMeasuresBetter) {
-  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
-  TrialDriver unguarded(p.problem, settings, fallback);
-  settings.guard.verify_trials = 2;
-  settings.guard.interleave = true;
-  TrialDriver guarded(p.problem, settings, fallback);
-  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
-  const std::vector<TrialOutcome> b = guarded.Run(plant, lq.x0, 40 + 4 * 12);
+  HarmGuardSettings guard;
+  guard.verify_trials = 2;
+  guard.interleave = true;
+  const GuardedRuns r = RunWithAndWithoutGuard(guard, 40, 40 + 4 * 12);
+  const std::vector<TrialOutcome>& a = r.unguarded;
+  const std::vector<TrialOutcome>& b = r.guarded;
   std::vector<const TrialOutcome*> judged;
   int old_runs = 0;
   for (size_t i = 0; i < b.size(); ++i) {
@@ -737,19 +758,18 @@ TEST_F(TrialDriverTest, TheInterleavedGuardKeepsEveryLawThatMeasuresBetter) {
   ASSERT_GE(judged.size(), 30u);
   EXPECT_GE(ExpectSameDecisions(judged, a), 3);
   EXPECT_GE(old_runs, 2 * 3) << "the replaced law ran between the new law's re-runs";
-  EXPECT_EQ(guarded.reverts(), 0);
+  EXPECT_EQ(r.reverts, 0);
 }
 
 // When the judged cost is the learner's, the guard keeps every law the learner accepts, and on
 // a deterministic plant the learner decides as without it, trial for trial: the re-runs are
 // inserted after each accepted trial and change nothing else.
 TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
-  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
-  TrialDriver unguarded(p.problem, settings, fallback);
-  settings.guard.verify_trials = 2;
-  TrialDriver guarded(p.problem, settings, fallback);
-  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
-  const std::vector<TrialOutcome> b = guarded.Run(plant, lq.x0, 40 + 2 * 12);
+  HarmGuardSettings guard;
+  guard.verify_trials = 2;
+  const GuardedRuns r = RunWithAndWithoutGuard(guard, 40, 40 + 2 * 12);
+  const std::vector<TrialOutcome>& a = r.unguarded;
+  const std::vector<TrialOutcome>& b = r.guarded;
   std::vector<const TrialOutcome*> judged;
   for (const TrialOutcome& o : b) {
     if (!o.remeasured) judged.push_back(&o);
@@ -757,7 +777,7 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
   }
   ASSERT_GE(judged.size(), 30u);
   EXPECT_GE(ExpectSameDecisions(judged, a), 3);
-  EXPECT_EQ(guarded.reverts(), 0);
+  EXPECT_EQ(r.reverts, 0);
 }
 
 // only_when_worse re-runs an accepted law only when its trial's judged cost is above the
@@ -767,20 +787,17 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
 // abandoned as by the guard that always re-runs, trial for trial.
 TEST_F(TrialDriverTest, TheGuardOnlyWhenWorseReRunsTheLawsTheReportedCostContradicts) {
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
-  TrialDriver unguarded(p.problem, settings, fallback);
   settings.guard.verify_trials = 3;
   settings.guard.only_when_worse = true;
-  TrialDriver agreeing(p.problem, settings, fallback);
-  const std::vector<TrialOutcome> a = unguarded.Run(plant, lq.x0, 40);
-  const std::vector<TrialOutcome> b = agreeing.Run(plant, lq.x0, 40);
+  const GuardedRuns agreeing = RunWithAndWithoutGuard(settings.guard, 40, 40);
   std::vector<const TrialOutcome*> all;
-  for (const TrialOutcome& o : b) {
+  for (const TrialOutcome& o : agreeing.guarded) {
     EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
     all.push_back(&o);
   }
-  EXPECT_GE(ExpectSameDecisions(all, a), 3);
-  EXPECT_EQ(agreeing.verifying(), 0);
-  EXPECT_EQ(agreeing.reverts(), 0);
+  EXPECT_GE(ExpectSameDecisions(all, agreeing.unguarded), 3);
+  EXPECT_EQ(agreeing.verifying, 0);
+  EXPECT_EQ(agreeing.reverts, 0);
 
   HeavyInputJudged h(lq, p);
   const TrialDriver::CostReference reference = h.reference();
