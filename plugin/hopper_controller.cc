@@ -62,6 +62,9 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(c.anchor_weight >= 0.0 && c.anchor_weight <= 1.0)) {
     fail("anchor_weight", c.anchor_weight, "in [0, 1]");
   }
+  if (!(c.reference_filter > 0.0 && c.reference_filter <= 1.0)) {
+    fail("reference_filter", c.reference_filter, "in (0, 1]");
+  }
   if (!(c.pitch_experiment.scale >= 0.0 && c.pitch_experiment.scale <= 1.0)) {
     fail("pitch_experiment.scale", c.pitch_experiment.scale, "in [0, 1]");
   }
@@ -255,10 +258,15 @@ void HopperController::MakeDriver(int warmup) {
   TrialDriverSettings settings = config_.driver;
   settings.warmup_trials = std::max(settings.warmup_trials, warmup);
   const bool mrl = settings.method == Method::kMrl;
+  // A filtered own state moves the learner's reference between hops: the nominal is compared
+  // under the present one.
+  if (config_.anchor_reference && config_.anchor_weight < 1.0 && config_.reference_filter < 1.0) {
+    settings.learner.reference_shift = true;
+  }
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
       HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector(),
-                          config_.anchor_weight));
+                          config_.anchor_weight, config_.reference_filter));
   // The Initialize hop's pass sweeps its periodic value from u^0's fixed point on the model.
   driver_->SeedCyclicValue(cyclic_value_);
 }

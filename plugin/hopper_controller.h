@@ -107,6 +107,10 @@ struct ControllerConfig {
   /// With anchor_reference: I1's x_ref for the learner is w x the gait's takeoff state + (1 - w)
   /// x the hop's own start, w in [0, 1]; 1 = the gait's alone. Default 1.
   double anchor_weight = 1.0;
+  /// With anchor_weight < 1: gain b in (0, 1] of the filter of the hop's own start in that
+  /// blend, s <- s + b (x(0) - s) from the gait's takeoff state (HopperCostReference); 1 = the
+  /// hop's own start unfiltered. Default 1.
+  double reference_filter = 1.0;
   /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
   /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;

@@ -144,6 +144,7 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->I("learner.failure_raises", s.failure_raises);
   k->D("learner.curvature_scale_min", s.curvature_scale_min);
   k->B("learner.start_correction", s.start_correction);
+  if (s.reference_shift) k->B("learner.reference_shift", true);  // keys of older caches hold
   k->B("learner.restart_on_failure", s.restart_on_failure);
   k->D("learner.restart_alpha", s.restart_alpha);
   k->B("learner.remeasure_nominal", s.remeasure_nominal);
@@ -407,7 +408,7 @@ std::string InitialLawKey(const ControllerConfig& c) {
   k.D("dt_model", c.dt_model);
   AddLearnerSettings(c.model_learner, &k);
   // Not read by the model solve: driver, contact, max_samples_per_mode, anchor_reference,
-  // anchor_weight, offline_latency, offline_thread, pitch_experiment, law_cache.
+  // anchor_weight, reference_filter, offline_latency, offline_thread, pitch_experiment, law_cache.
   return k.text();
 }
 

@@ -94,6 +94,12 @@ struct LearnerSettings {
   /// trial's cost reference (docs/engine.md, "Trials from other starts"); with cyclic_value > 0
   /// P(0) also values the following cycles. Default true.
   bool start_correction = true;
+  /// Only the second term of start_correction: (36) and the Armijo test use I^i plus the
+  /// nominal's cost change under the cost's current reference since the nominal was adopted
+  /// (for a reference that moves between trials, e.g. a filtered estimate of the plant's own
+  /// state; docs/engine.md, "Trials from other starts"). Implied by start_correction. Default
+  /// false.
+  bool reference_shift = false;
   /// Online learning: when alpha < alpha_min the line search restarts (alpha <- alpha_initial,
   /// the same nominal and cost) instead of terminating; batch Solve still terminates. Default
   /// false.
@@ -215,7 +221,7 @@ struct LearnerCheckpoint {
   bool valid = false;           ///< Save() filled it
   Trajectory nominal;           ///< x^i, u^i, T^i
   double cost = 0;              ///< I^i
-  double own_cost = 0;          ///< start_correction: its cost under the reference it was adopted with
+  double own_cost = 0;          ///< start_correction, reference_shift: its cost under the reference it was adopted with
   bool initial = true;          ///< produced by the initial law (no accepted trial)
   OnlineController law;         ///< the accepted trial's law that produced it (unused when initial)
   Trajectory previous_nominal;  ///< use_previous_du: the nominal before it

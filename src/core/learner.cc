@@ -216,7 +216,9 @@ bool Learner::AcceptNominal(const Trajectory& direction, double cost) {
     return false;
   }
   nominal_cost_ = cost;
-  nominal_own_cost_ = settings_.start_correction ? EvaluateCost(*problem_, nominal_).total : 0.0;
+  nominal_own_cost_ = settings_.start_correction || settings_.reference_shift
+                         ? EvaluateCost(*problem_, nominal_).total
+                         : 0.0;
   nominal_samples_ = 0;
   nominal_sample_sum_ = 0;
   last_sample_ = cost;
@@ -228,15 +230,17 @@ double Learner::cost_noise() const {
 }
 
 double Learner::StartShift(const ConstVectorRef& x0) const {
-  if (!settings_.start_correction || !initialized_ || x0.size() != nominal_.x0.size()) return 0.0;
+  if (!initialized_ || !(settings_.start_correction || settings_.reference_shift)) return 0.0;
+  // The nominal's own cost under the cost's current reference (a reference that depends on the
+  // trial, e.g. the hopper's I1 against the trial's start) minus the one it was adopted with.
+  const double reference = EvaluateCost(*problem_, nominal_).total - nominal_own_cost_;
+  if (!settings_.start_correction) return std::isfinite(reference) ? reference : 0.0;
+  if (x0.size() != nominal_.x0.size()) return 0.0;
   const Vector dx = x0 - nominal_.x0;
   const Eigen::Index n = dx.size();
   const auto P = pass_.P(0, 0);
   const auto p = pass_.p(0, 0);
   const double value = p.head(n).dot(dx) + 0.5 * dx.dot(P.topLeftCorner(n, n) * dx);
-  // The nominal's own cost under the cost's current reference (a reference that depends on the
-  // trial, e.g. the hopper's I1 against the trial's start) minus the one it was adopted with.
-  const double reference = EvaluateCost(*problem_, nominal_).total - nominal_own_cost_;
   const double shift = value + reference;
   return std::isfinite(shift) ? shift : 0.0;
 }

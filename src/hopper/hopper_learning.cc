@@ -1,6 +1,8 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/hopper/hopper_learning.h"
 
+#include <memory>
+
 #include "ddoc/policy.h"
 
 namespace ddoc {
@@ -80,18 +82,29 @@ void HopperPredictionPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajec
 }
 
 TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor,
-                                               double anchor_weight) {
+                                               double anchor_weight, double filter) {
   if (!(anchor_weight >= 0.0 && anchor_weight <= 1.0)) {
     throw InvalidArgument("HopperCostReference: anchor_weight = " + std::to_string(anchor_weight) +
                           ", expected in [0, 1]");
   }
-  return [cost, anchor, anchor_weight](const Trajectory& trial, bool for_learner) {
+  if (!(filter > 0.0 && filter <= 1.0)) {
+    throw InvalidArgument("HopperCostReference: filter = " + std::to_string(filter) +
+                          ", expected in (0, 1]");
+  }
+  // The filtered start state s, from the anchor: s <- s + filter (x(0) - s) at each learner call.
+  auto own = std::make_shared<Vector>(anchor);
+  return [cost, anchor, anchor_weight, filter, own](const Trajectory& trial, bool for_learner) {
     if (!for_learner || anchor.size() == 0) {
       cost->SetReference(trial.x0);
     } else if (anchor_weight == 1.0) {
       cost->SetReference(anchor);
-    } else {
+    } else if (filter == 1.0) {
       cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * trial.x0);
+    } else {
+      if (trial.x0.size() == own->size() && trial.x0.allFinite()) {
+        *own += filter * (trial.x0 - *own);
+      }
+      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * *own);
     }
   };
 }

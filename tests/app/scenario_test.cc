@@ -150,6 +150,12 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   EXPECT_EQ(*s.learning.anchor_weight, 0.9);
   ExpectError(Fill(fmt, "anchor_weight='1.5'"), {"<learning>", "anchor_weight", "1.5"});
   ExpectError(Fill(fmt, "anchor_weight='-0.5'"), {"<learning>", "anchor_weight", "-0.5"});
+  EXPECT_FALSE(s.learning.reference_filter.has_value());
+  s = LoadScenario(Write(Fill(fmt, "anchor_weight='0.5' reference_filter='0.1'")));
+  ASSERT_TRUE(s.learning.reference_filter.has_value());
+  EXPECT_EQ(*s.learning.reference_filter, 0.1);
+  ExpectError(Fill(fmt, "reference_filter='0'"), {"<learning>", "reference_filter", "0"});
+  ExpectError(Fill(fmt, "reference_filter='1.5'"), {"<learning>", "reference_filter", "1.5"});
   ExpectError(Fill(fmt, "reference='nominal'"),
               {"<learning>", "reference=\"nominal\"", "own or gait"});
   ExpectError(Fill(fmt, "terminal='takeoff'"),
@@ -212,6 +218,11 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   EXPECT_FALSE(c.driver.guard.log_cost);
   EXPECT_FALSE(c.driver.guard.only_when_worse);
   EXPECT_DOUBLE_EQ(c.anchor_weight, 1.0);
+  EXPECT_DOUBLE_EQ(c.reference_filter, 1.0);
+  EXPECT_FALSE(c.driver.learner.reference_shift);
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "reference_filter='0.2'"))),
+                          HopperParams());
+  EXPECT_DOUBLE_EQ(c.reference_filter, 0.2);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "verify_hops='3' verify_interleave='on' verify_log='on' "
                                    "verify_when='worse' anchor_weight='0.8'"))),

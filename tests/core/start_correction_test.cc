@@ -56,6 +56,39 @@ TEST(StartCorrection, AMovedReferenceShiftsThePredictedCostOfTheNominalLaw) {
   EXPECT_NEAR(r.decrease, r.cost - moved_nominal_cost, 1e-9 * std::abs(truth));
 }
 
+// reference_shift alone (start_correction off): the shift is the nominal's cost change under
+// the moved target and nothing of the start, so a trial from another start is compared with
+// the nominal's moved cost as it is; without either setting the shift stays 0.
+TEST(StartCorrection, TheReferenceShiftAloneIsTheNominalsCostChange) {
+  for (bool on : {false, true}) {
+    TwoModeLq lq;
+    LqProblem p{lq};
+    ModelPlant plant{p.problem};
+    Trajectory nominal, measured;
+    FunctionPolicy initial = ZeroInputPolicy();
+    plant.Run(lq.x0, initial, &nominal);
+    LearnerSettings settings = LqTestSettings();
+    settings.start_correction = false;
+    settings.reference_shift = on;
+    Learner learner(p.problem, settings);
+    learner.Initialize(nominal);
+    const double cost0 = learner.nominal_cost();
+    const Vector x1 = lq.x0 + Eigen::Vector2d(0.3, -0.4);
+    EXPECT_EQ(learner.StartShift(x1), 0.0) << "reference still, on " << on;
+
+    p.cost.r_[1] = Eigen::Vector2d(0.6, -0.3);  // the terminal target moves
+    const double change = EvaluateCost(p.problem, learner.nominal()).total - cost0;
+    ASSERT_GT(std::abs(change), 0.05 * cost0) << "the move must matter";
+    EXPECT_NEAR(learner.StartShift(x1), on ? change : 0.0, 1e-12 * std::abs(change))
+        << "on " << on;
+    plant.Run(x1, learner.NextTrial(), &measured);
+    const TrialResult r = learner.CompleteTrial(measured);
+    EXPECT_NEAR(r.start_shift, on ? change : 0.0, 1e-12 * std::abs(change)) << "on " << on;
+    EXPECT_NEAR(r.decrease, r.cost - (cost0 + (on ? change : 0.0)), 1e-12 * std::abs(change))
+        << "on " << on;
+  }
+}
+
 }  // namespace
 }  // namespace testing
 }  // namespace ddoc

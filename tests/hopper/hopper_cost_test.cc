@@ -1,9 +1,11 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/hopper/hopper_cost.h"
 
+#include <cmath>
 #include <limits>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -172,6 +174,52 @@ TEST(HopperCostTest, TheLearnersReferenceBlendsTheAnchorAndTheHopsStart) {
       ADD_FAILURE() << "no error for anchor_weight " << bad;
     } catch (const InvalidArgument& e) {
       EXPECT_NE(std::string(e.what()).find("anchor_weight"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// reference_filter b < 1: the hop's own start in the blend is replaced by s, s <- s + b (x(0) - s)
+// at each learner call from s = anchor, computed here as a running sum; a call for the reported
+// cost neither moves s nor uses it, and a start of the wrong size or with a NaN leaves s.
+TEST(HopperCostTest, TheFilteredReferenceFollowsTheHopsStartsAtItsGain) {
+  const HopperModel model{HopperParams()};
+  HopperCost cost(model);
+  std::mt19937 rng(12);
+  const Eigen::VectorXd anchor = Random(14, &rng, 1.0);
+  const double w = 0.25, b = 0.2;
+  const TrialDriver::CostReference ref = HopperCostReference(&cost, anchor, w, b);
+  // s after k starts: (1 - b)^k anchor + sum_j b (1 - b)^(k - 1 - j) x_j.
+  std::vector<Eigen::VectorXd> starts;
+  Trajectory trial;
+  for (int k = 1; k <= 4; ++k) {
+    trial.x0 = Random(14, &rng, 1.0);
+    starts.push_back(trial.x0);
+    ref(trial, false);
+    EXPECT_EQ(Eigen::VectorXd(cost.reference()), trial.x0) << "reported, call " << k;
+    ref(trial, true);
+    Eigen::VectorXd s = std::pow(1.0 - b, k) * anchor;
+    for (int j = 0; j < k; ++j) s += b * std::pow(1.0 - b, k - 1 - j) * starts[j];
+    for (int i = 0; i < 14; ++i) {
+      EXPECT_NEAR(cost.reference()(i), w * anchor(i) + (1.0 - w) * s(i), 1e-14)
+          << "call " << k << " coordinate " << i;
+    }
+  }
+  const Eigen::VectorXd before = cost.reference();
+  trial.x0(3) = std::numeric_limits<double>::quiet_NaN();
+  ref(trial, true);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), before) << "a NaN start moved the filter";
+  trial.x0 = Eigen::VectorXd::Zero(10);
+  ref(trial, true);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), before) << "a start of another size moved the filter";
+  // With the gait alone (w = 1) the filter has nothing to act on.
+  HopperCostReference(&cost, anchor, 1.0, b)(trial, true);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), anchor);
+  for (double bad : {0.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      HopperCostReference(&cost, anchor, w, bad);
+      ADD_FAILURE() << "no error for filter " << bad;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("filter"), std::string::npos) << e.what();
     }
   }
 }

@@ -58,6 +58,10 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   bad_anchor.anchor_weight = 1.5;
   EXPECT_EQ(HopperController::Create(model.get(), bad_anchor, &error), nullptr);
   EXPECT_NE(error.find("anchor_weight = 1.5, expected in [0, 1]"), std::string::npos) << error;
+  ControllerConfig bad_filter;
+  bad_filter.reference_filter = 0.0;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_filter, &error), nullptr);
+  EXPECT_NE(error.find("reference_filter = 0, expected in (0, 1]"), std::string::npos) << error;
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
@@ -476,6 +480,31 @@ TEST(HopperControllerTest, LearnerCostIsTheCostUnderTheLearnersReference) {
       EXPECT_GT(largest, 0.1);
     } else {
       EXPECT_LT(largest, 2e-3);
+    }
+  }
+}
+
+TEST(HopperControllerTest, AFilteredReferenceShiftsTheNominalsCost) {
+  // reference_filter < 1 moves the learner's I1 reference between hops, so each judged hop
+  // compares with the nominal's cost under the present reference (start_shift, the nominal's
+  // change since it was adopted); with the hop's own start unfiltered there is nothing to shift.
+  for (double filter : {1.0, 0.1}) {
+    ControllerConfig config;
+    config.anchor_weight = 0.5;
+    config.reference_filter = filter;
+    Robot rig("hopper_m8.xml", config, false);
+    ASSERT_TRUE(rig.ok());
+    const std::vector<HopReport> reports = rig.Run(6, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 6u);
+    int shifted = 0;
+    for (size_t h = 1; h < reports.size(); ++h) {
+      ASSERT_TRUE(std::isfinite(reports[h].start_shift)) << "hop " << h;
+      if (reports[h].start_shift != 0.0) ++shifted;
+    }
+    if (filter == 1.0) {
+      EXPECT_EQ(shifted, 0);
+    } else {
+      EXPECT_EQ(shifted, 5);
     }
   }
 }

@@ -76,9 +76,13 @@ class HopperPredictionPlant : public Plant {
 /// set to the trial's own start x(0) (the paper's (42)), or, for the costs the learner sees and
 /// when `anchor` is not empty, to `anchor` (e.g. the model gait's takeoff state, so that I1 also
 /// pulls the robot back to the gait; NOT the paper), or with `anchor_weight` w < 1 to w anchor +
-/// (1 - w) x(0). `cost` must outlive the driver.
+/// (1 - w) x(0). With `filter` b < 1 (and w < 1) x(0) is replaced by s, the robot's own start
+/// state filtered over the learner's trials: s <- s + b (x(0) - s) at each call with for_learner,
+/// s = anchor at first; the reference then moves between trials (LearnerSettings::
+/// reference_shift). Throws InvalidArgument for w outside [0, 1] or b outside (0, 1]. `cost`
+/// must outlive the driver.
 TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector(),
-                                               double anchor_weight = 1.0);
+                                               double anchor_weight = 1.0, double filter = 1.0);
 
 /// u^0, T^0 of every method (Section V-C): Algorithm 1 run to convergence on the model itself
 /// (`model_plant` as both plants) from the gait's constant input u0 and durations T0; the OC-FB
