@@ -17,21 +17,33 @@ namespace ddoc {
 namespace testing {
 namespace {
 
+// The two-mode LQ problem and a learner initialized on the zero-input law's trajectory.
+struct InitializedLearner {
+  explicit InitializedLearner(const LearnerSettings& settings) : learner(p.problem, settings) {
+    FunctionPolicy initial = ZeroInputPolicy();
+    plant.Run(lq.x0, initial, &nominal);
+    learner.Initialize(nominal);
+  }
+  TwoModeLq lq;
+  LqProblem p{lq};
+  ModelPlant plant{p.problem};
+  Trajectory nominal;
+  Learner learner;
+};
+
 // A terminal target that moves after the nominal was adopted (as the hopper's I1 is measured
 // against each trial's own start): the nominal law run again from the nominal's start costs
 // its cost under the moved target, and StartShift must predict that change; from another start
 // the shift moves by exactly the nominal's cost change, whatever dx.
 TEST(StartCorrection, AMovedReferenceShiftsThePredictedCostOfTheNominalLaw) {
-  TwoModeLq lq;
-  LqProblem p{lq};
-  ModelPlant plant{p.problem};
-  Trajectory nominal, measured;
-  FunctionPolicy initial = ZeroInputPolicy();
-  plant.Run(lq.x0, initial, &nominal);
   LearnerSettings settings = LqTestSettings();
   settings.start_correction = true;
-  Learner learner(p.problem, settings);
-  learner.Initialize(nominal);
+  InitializedLearner t(settings);
+  const TwoModeLq& lq = t.lq;
+  LqProblem& p = t.p;
+  ModelPlant& plant = t.plant;
+  Learner& learner = t.learner;
+  Trajectory measured;
   const double cost0 = learner.nominal_cost();
   const Vector x1 = lq.x0 + Eigen::Vector2d(0.3, -0.4);
   const double shift_x1_still = learner.StartShift(x1);
@@ -61,17 +73,14 @@ TEST(StartCorrection, AMovedReferenceShiftsThePredictedCostOfTheNominalLaw) {
 // the nominal's moved cost as it is; without either setting the shift stays 0.
 TEST(StartCorrection, TheReferenceShiftAloneIsTheNominalsCostChange) {
   for (bool on : {false, true}) {
-    TwoModeLq lq;
-    LqProblem p{lq};
-    ModelPlant plant{p.problem};
-    Trajectory nominal, measured;
-    FunctionPolicy initial = ZeroInputPolicy();
-    plant.Run(lq.x0, initial, &nominal);
     LearnerSettings settings = LqTestSettings();
     settings.start_correction = false;
     settings.reference_shift = on;
-    Learner learner(p.problem, settings);
-    learner.Initialize(nominal);
+    InitializedLearner t(settings);
+    const TwoModeLq& lq = t.lq;
+    LqProblem& p = t.p;
+    Learner& learner = t.learner;
+    Trajectory measured;
     const double cost0 = learner.nominal_cost();
     const Vector x1 = lq.x0 + Eigen::Vector2d(0.3, -0.4);
     EXPECT_EQ(learner.StartShift(x1), 0.0) << "reference still, on " << on;
@@ -81,7 +90,7 @@ TEST(StartCorrection, TheReferenceShiftAloneIsTheNominalsCostChange) {
     ASSERT_GT(std::abs(change), 0.05 * cost0) << "the move must matter";
     EXPECT_NEAR(learner.StartShift(x1), on ? change : 0.0, 1e-12 * std::abs(change))
         << "on " << on;
-    plant.Run(x1, learner.NextTrial(), &measured);
+    t.plant.Run(x1, learner.NextTrial(), &measured);
     const TrialResult r = learner.CompleteTrial(measured);
     EXPECT_NEAR(r.start_shift, on ? change : 0.0, 1e-12 * std::abs(change)) << "on " << on;
     EXPECT_NEAR(r.decrease, r.cost - (cost0 + (on ? change : 0.0)), 1e-12 * std::abs(change))

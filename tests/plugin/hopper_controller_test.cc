@@ -459,6 +459,15 @@ TEST(HopperControllerTest, LearnerThatNeverAcceptsFallsBackToTheInitialLaw) {
   EXPECT_EQ(rig.c().learner()->iteration(), 0);
 }
 
+// The reports of six hops of the 8 kg robot under `config`, learned offline; none when the
+// controller cannot be created.
+std::vector<HopReport> SixHopsOfTheEightKgRobot(const ControllerConfig& config) {
+  Robot rig("hopper_m8.xml", config, false);
+  EXPECT_TRUE(rig.ok());
+  if (!rig.ok()) return {};
+  return rig.Run(6, Host::kRunsOffline);
+}
+
 TEST(HopperControllerTest, LearnerCostIsTheCostUnderTheLearnersReference) {
   // learner_cost is the cost that (36) compared. With I1 against the hop's own start (the
   // paper's reading, anchor_reference = false) it is the reported cost of (42), up to the
@@ -467,9 +476,7 @@ TEST(HopperControllerTest, LearnerCostIsTheCostUnderTheLearnersReference) {
   for (bool anchor : {false, true}) {
     ControllerConfig config;
     config.anchor_reference = anchor;
-    Robot rig("hopper_m8.xml", config, false);
-    ASSERT_TRUE(rig.ok());
-    const std::vector<HopReport> reports = rig.Run(6, Host::kRunsOffline);
+    const std::vector<HopReport> reports = SixHopsOfTheEightKgRobot(config);
     ASSERT_EQ(reports.size(), 6u);
     double largest = 0;
     for (const HopReport& r : reports) {
@@ -492,9 +499,7 @@ TEST(HopperControllerTest, AFilteredReferenceShiftsTheNominalsCost) {
     ControllerConfig config;
     config.anchor_weight = 0.5;
     config.reference_filter = filter;
-    Robot rig("hopper_m8.xml", config, false);
-    ASSERT_TRUE(rig.ok());
-    const std::vector<HopReport> reports = rig.Run(6, Host::kRunsOffline);
+    const std::vector<HopReport> reports = SixHopsOfTheEightKgRobot(config);
     ASSERT_EQ(reports.size(), 6u);
     int shifted = 0;
     for (size_t h = 1; h < reports.size(); ++h) {
