@@ -98,13 +98,12 @@ TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& a
       cost->SetReference(trial.x0);
     } else if (anchor_weight == 1.0) {
       cost->SetReference(anchor);
-    } else if (filter == 1.0) {
-      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * trial.x0);
     } else {
-      if (trial.x0.size() == own->size() && trial.x0.allFinite()) {
+      if (filter < 1.0 && trial.x0.size() == own->size() && trial.x0.allFinite()) {
         *own += filter * (trial.x0 - *own);
       }
-      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * *own);
+      const Vector& start = filter == 1.0 ? trial.x0 : *own;
+      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * start);
     }
   };
 }
