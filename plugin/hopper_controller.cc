@@ -260,13 +260,13 @@ void HopperController::MakeDriver(int warmup) {
   const bool mrl = settings.method == Method::kMrl;
   // A filtered own state moves the learner's reference between hops: the nominal is compared
   // under the present one.
-  if (config_.anchor_reference && config_.anchor_weight < 1.0 && config_.reference_filter < 1.0) {
+  const Vector anchor = config_.anchor_reference ? Vector(gait_.x0) : Vector();
+  if (HopperReferenceMoves(anchor, config_.anchor_weight, config_.reference_filter)) {
     settings.learner.reference_shift = true;
   }
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
-      HopperCostReference(&cost_, config_.anchor_reference ? Vector(gait_.x0) : Vector(),
-                          config_.anchor_weight, config_.reference_filter));
+      HopperCostReference(&cost_, anchor, config_.anchor_weight, config_.reference_filter));
   // The Initialize hop's pass sweeps its periodic value from u^0's fixed point on the model.
   driver_->SeedCyclicValue(cyclic_value_);
 }

@@ -27,7 +27,20 @@ import re
 import sys
 import threading
 
-import numpy as np
+
+def missing_module(error, package):
+    """The message for a tool whose interpreter lacks a module: which interpreter, which module, and
+    the Debian package that gives it to /usr/bin/python3."""
+    tool = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "ddoc tools"
+    return (f"{tool}: the Python interpreter {sys.executable} has no module '{error.name}' "
+            f"({error}); the tools run with Debian's /usr/bin/python3 and its package {package} "
+            f"(installed by tools/setup.sh)")
+
+
+try:
+    import numpy as np
+except ImportError as e:
+    raise SystemExit(missing_module(e, "python3-numpy")) from None
 
 # ---------------------------------------------------------------------------------------------------
 # Format of the run directory (the contract with ddoc-hopper)
@@ -569,9 +582,12 @@ LINESTYLES = {"alg1": "-", "ocfb": "--", "mrl": ":"}
 
 
 def _matplotlib():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError as e:
+        raise SystemExit(missing_module(e, "python3-matplotlib")) from None
     return plt
 
 

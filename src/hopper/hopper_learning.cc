@@ -92,20 +92,26 @@ TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& a
                           ", expected in (0, 1]");
   }
   // The filtered start state s, from the anchor: s <- s + filter (x(0) - s) at each learner call.
+  const bool moves = HopperReferenceMoves(anchor, anchor_weight, filter);
   auto own = std::make_shared<Vector>(anchor);
-  return [cost, anchor, anchor_weight, filter, own](const Trajectory& trial, bool for_learner) {
+  return [cost, anchor, anchor_weight, filter, moves, own](const Trajectory& trial,
+                                                           bool for_learner) {
     if (!for_learner || anchor.size() == 0) {
       cost->SetReference(trial.x0);
     } else if (anchor_weight == 1.0) {
       cost->SetReference(anchor);
     } else {
-      if (filter < 1.0 && trial.x0.size() == own->size() && trial.x0.allFinite()) {
+      if (moves && trial.x0.size() == own->size() && trial.x0.allFinite()) {
         *own += filter * (trial.x0 - *own);
       }
-      const Vector& start = filter == 1.0 ? trial.x0 : *own;
+      const Vector& start = moves ? *own : trial.x0;
       cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * start);
     }
   };
+}
+
+bool HopperReferenceMoves(const Vector& anchor, double anchor_weight, double filter) {
+  return anchor.size() > 0 && anchor_weight < 1.0 && filter < 1.0;
 }
 
 SolveResult SolveFromGait(Learner& learner, Plant& model_plant, HopperCost* cost,

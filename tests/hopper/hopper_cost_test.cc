@@ -214,6 +214,11 @@ TEST(HopperCostTest, TheFilteredReferenceFollowsTheHopsStartsAtItsGain) {
   // With the gait alone (w = 1) the filter has nothing to act on.
   HopperCostReference(&cost, anchor, 1.0, b)(trial, true);
   EXPECT_EQ(Eigen::VectorXd(cost.reference()), anchor);
+  // The reference moves (and the learner needs reference_shift) exactly in the filtered case.
+  EXPECT_TRUE(HopperReferenceMoves(anchor, w, b));
+  EXPECT_FALSE(HopperReferenceMoves(anchor, 1.0, b));
+  EXPECT_FALSE(HopperReferenceMoves(anchor, w, 1.0));
+  EXPECT_FALSE(HopperReferenceMoves(Eigen::VectorXd(), w, b));
   for (double bad : {0.0, -0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
     try {
       HopperCostReference(&cost, anchor, w, bad);

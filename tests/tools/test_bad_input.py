@@ -3,7 +3,7 @@ and the column or option that is wrong; never a traceback."""
 import os
 import unittest
 
-from tools_test_util import TempDirTest, run_tool
+from tools_test_util import PYTHON, TempDirTest, run_tool
 
 
 def rewrite(path, fn):
@@ -99,6 +99,34 @@ class BadInputTest(TempDirTest):
         for p in self.both(d):
             self.assertEqual(p.returncode, 0, p.stderr)
             self.assertIn("summary.json: unreadable", p.stderr)
+
+
+    def missing(self, module):
+        """An environment whose interpreter cannot import `module`: a package of that name first on
+        PYTHONPATH that fails to import the way an absent one does."""
+        pkg = os.path.join(self.tmp, "blocked", module)
+        os.makedirs(pkg)
+        with open(os.path.join(pkg, "__init__.py"), "w") as f:
+            f.write(f"raise ModuleNotFoundError(\"No module named '{module}'\", name='{module}')\n")
+        return {"PYTHONPATH": os.path.join(self.tmp, "blocked")}
+
+    def assert_names_the_missing_module(self, p, tool, module, package):
+        self.assertNotEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+        for needle in (f"{tool}:", PYTHON, f"'{module}'", package):
+            self.assertIn(needle, p.stderr)
+
+    def test_a_missing_numpy_names_the_interpreter_and_the_package(self):
+        env = self.missing("numpy")
+        for tool in ("plot_fig2.py", "results_table.py", "robustness_map", "mass_sweep",
+                     "push_sweep"):
+            p = run_tool(tool, "--help", env=env)
+            self.assert_names_the_missing_module(p, tool, "numpy", "python3-numpy")
+
+    def test_a_missing_matplotlib_names_the_interpreter_and_the_package(self):
+        d = self.copy_run("exact_m8_alg1")
+        p = run_tool("plot_fig2.py", d, "--out", self.tmp, env=self.missing("matplotlib"))
+        self.assert_names_the_missing_module(p, "plot_fig2.py", "matplotlib", "python3-matplotlib")
 
 
 if __name__ == "__main__":

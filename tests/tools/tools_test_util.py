@@ -16,9 +16,10 @@ PYTHON = "/usr/bin/python3"  # Debian's interpreter, the one with matplotlib
 sys.path.insert(0, TOOLS)
 
 
-def run_tool(*args, cwd=None):
-    """Run a tool (path relative to tools/) with Debian's python; returns CompletedProcess."""
-    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg")
+def run_tool(*args, cwd=None, env=None):
+    """Run a tool (path relative to tools/) with Debian's python; returns CompletedProcess.
+    `env` adds to (or overrides) the environment."""
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", MPLBACKEND="Agg", **(env or {}))
     script = os.path.join(TOOLS, args[0])
     return subprocess.run([PYTHON, script, *args[1:]], capture_output=True, text=True, env=env,
                           cwd=cwd, timeout=300)

@@ -84,6 +84,11 @@ class HopperPredictionPlant : public Plant {
 TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector(),
                                                double anchor_weight = 1.0, double filter = 1.0);
 
+/// Whether HopperCostReference(cost, anchor, anchor_weight, filter) moves the learner's reference
+/// between trials (the filtered own state: anchor given, w < 1, b < 1); a learner given that
+/// reference needs LearnerSettings::reference_shift.
+bool HopperReferenceMoves(const Vector& anchor, double anchor_weight, double filter);
+
 /// u^0, T^0 of every method (Section V-C): Algorithm 1 run to convergence on the model itself
 /// (`model_plant` as both plants) from the gait's constant input u0 and durations T0; the OC-FB
 /// law is then learner.ConvergedPolicy(alpha). Sets the cost reference to the gait's x0 first.
