@@ -208,7 +208,8 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
                   "the robot's numbers: KEY=VALUE,... with mass (torso, kg), j_body (kg m^2), c_d "
                   "(drag, kg/m), beta (VSA bandwidth, rad/s), hip_gain, leg_gain (motor strength, 1 = as "
                   "commanded), b_leg (N s/m), b_hip (N m s/rad) (joint damping), slope (floor, "
-                  "rad, > 0 down hill), contact_timeconst (s), e.g. mass=11,c_d=0.02");
+                  "rad, > 0 down hill), contact_timeconst (s), r0 (the leg's rest length, m), e.g. "
+                  "mass=11,c_d=0.02");
   cli->add_option("--model-mjcf", model_mjcf, "model MJCF (overrides the scenario's model)");
   cli->add_option("--push", pushes,
                   "extra push TIME,FORCE,DURATION (s, N, s), or HOP@PHASE,FORCE,DURATION by the "

@@ -254,6 +254,7 @@ std::string RobotVariant::ToString() const {
   add("b_hip", b_hip);
   add("slope", slope);
   add("contact_timeconst", contact_timeconst);
+  add("r0", r0);
   return out;
 }
 
@@ -261,7 +262,7 @@ RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag)
   RobotVariant v;
   auto fail = [&](const std::string& what) { throw std::invalid_argument(flag + ": " + what); };
   const std::string keys =
-      "mass, j_body, c_d, beta, hip_gain, leg_gain, b_leg, b_hip, slope or contact_timeconst";
+      "mass, j_body, c_d, beta, hip_gain, leg_gain, b_leg, b_hip, slope, contact_timeconst or r0";
   if (text.empty()) fail("empty; expected KEY=VALUE,... with keys " + keys);
   std::istringstream in(text);
   for (std::string item; std::getline(in, item, ',');) {
@@ -283,6 +284,7 @@ RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag)
                                    : key == "b_hip"    ? &v.b_hip
                                    : key == "slope"    ? &v.slope
                                    : key == "contact_timeconst" ? &v.contact_timeconst
+                                   : key == "r0"                ? &v.r0
                                                                 : nullptr;
     if (field == nullptr) fail("unknown key \"" + key + "\"; expected " + keys);
     if (*field) fail(key + " given twice");
@@ -359,6 +361,14 @@ std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant
   if (variant.b_hip) SetJointDamping(root, path, "hip", *variant.b_hip);
   if (variant.slope) SetSlope(root, path, *variant.slope);
   if (variant.contact_timeconst) SetContactTimeConstant(root, path, *variant.contact_timeconst);
+  if (variant.r0) {
+    tinyxml2::XMLElement* foot = FindNamed(root, "body", "foot");
+    if (foot == nullptr) {
+      throw std::runtime_error("robot MJCF '" + path +
+                               "' has no <body name=\"foot\"> to set the leg's rest length r0 of");
+    }
+    foot->SetAttribute("pos", ("0 0 " + Number(-*variant.r0)).c_str());
+  }
   tinyxml2::XMLPrinter printer;
   doc.Print(&printer);
   return printer.CStr();

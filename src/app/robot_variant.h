@@ -32,17 +32,20 @@ struct RobotVariant {
   /// Time constant of the foot-floor contact (solref[0] of the floor and the foot), s, >= 2 x the
   /// MJCF's timestep (MuJoCo's smallest; the shipped robots have 0.001 = 2 x 0.5 ms).
   std::optional<double> contact_timeconst;
+  /// Rest length of the leg, m, > 0: the body "foot" at pos = (0, 0, -r0) below the hip, where
+  /// the leg spring is relaxed (the shipped robots' 0.7 = the model's r0; 0.72 = 2 cm longer).
+  std::optional<double> r0;
   static constexpr double kMaxSlope = 0.3;  ///< bound of |slope|, rad (17 deg)
   bool empty() const {
     return !mass && !j_body && !c_d && !beta && !hip_gain && !leg_gain && !b_leg && !b_hip &&
-           !slope && !contact_timeconst;
+           !slope && !contact_timeconst && !r0;
   }
   /// "mass=11,c_d=0.02" (the keys set, in this order).
   std::string ToString() const;
 };
 
 /// Parses "KEY=VALUE,..." with keys mass, j_body, c_d, beta, hip_gain, leg_gain, b_leg, b_hip,
-/// slope, contact_timeconst. Throws std::invalid_argument naming the flag (`flag`), the key or
+/// slope, contact_timeconst, r0. Throws std::invalid_argument naming the flag (`flag`), the key or
 /// value and the bound ("--robot-variant: mass=-1, expected > 0"); contact_timeconst's bound of
 /// 2 x timestep is checked by ExpandRobotMjcf, which knows the timestep.
 RobotVariant ParseRobotVariant(const std::string& text, const std::string& flag);

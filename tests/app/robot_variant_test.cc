@@ -121,17 +121,40 @@ TEST(RobotVariantTest, ContactTimeconstSetsTheFootFloorSolref) {
   }
 }
 
+TEST(RobotVariantTest, RestLengthMovesTheFootAndNothingElse) {
+  RobotVariant v;
+  v.r0 = 0.72;
+  const MjModelPtr longer = Compile(Model("hopper_m8.xml"), v);
+  const MjModelPtr plain = LoadMjcf(Model("hopper_m8.xml"));
+  const int foot = Id(plain.get(), mjOBJ_BODY, "foot");
+  EXPECT_EQ(plain->body_pos[3 * foot + 2], -0.7);
+  EXPECT_EQ(longer->body_pos[3 * foot + 2], -0.72);
+  // What the robot is, read back the way the runs read it: r0 moved, M, c_d, beta unchanged, and
+  // J_leg only by the 2 g foot's m r0^2.
+  const HopperParams a = HopperParamsFromModel(plain.get(), "plain");
+  const HopperParams b = HopperParamsFromModel(longer.get(), "longer");
+  EXPECT_DOUBLE_EQ(b.r0, 0.72);
+  EXPECT_EQ(b.M, a.M);
+  EXPECT_EQ(b.c_d, a.c_d);
+  EXPECT_EQ(b.beta, a.beta);
+  const double m_foot = plain->body_mass[foot];
+  EXPECT_NEAR(b.J_leg - a.J_leg, m_foot * (0.72 * 0.72 - 0.7 * 0.7), 1e-12);
+  ExpectSameTerms(longer.get(), plain.get(), 0.0);
+  EXPECT_EQ(v.ToString(), "r0=0.72");
+}
+
 TEST(RobotVariantTest, TheFilesOwnValuesGiveThePlainModel) {
   RobotVariant v;
   v.b_leg = 0.0;
   v.b_hip = 0.0;
   v.slope = 0.0;
   v.contact_timeconst = 0.001;
+  v.r0 = 0.7;
   for (const char* robot : {"hopper_m8.xml", "hopper_m12.xml"}) {
     SCOPED_TRACE(robot);
     ExpectSameTerms(Compile(Model(robot), v).get(), LoadMjcf(Model(robot)).get(), 0.0);
   }
-  EXPECT_EQ(v.ToString(), "b_leg=0,b_hip=0,slope=0,contact_timeconst=0.001");
+  EXPECT_EQ(v.ToString(), "b_leg=0,b_hip=0,slope=0,contact_timeconst=0.001,r0=0.7");
 }
 
 TEST(RobotVariantTest, BadValuesAreNamed) {
@@ -145,6 +168,8 @@ TEST(RobotVariantTest, BadValuesAreNamed) {
       {"slope=-0.4", "--robot-variant: slope=-0.4, expected |slope| < 0.3 rad"},
       {"contact_timeconst=0", "--robot-variant: contact_timeconst=0, expected > 0 s"},
       {"b_leg=1,b_leg=2", "--robot-variant: b_leg given twice"},
+      {"r0=0", "--robot-variant: r0=0, expected > 0"},
+      {"r0=-0.7", "--robot-variant: r0=-0.7, expected > 0"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.text);
