@@ -104,6 +104,18 @@ tinyxml2::XMLElement* FindNamed(tinyxml2::XMLElement* e, const char* tag, const 
   return nullptr;
 }
 
+// The <tag name="name"> below root, or an error naming it and what the variant needs it for
+// ("robot MJCF '...' has no <joint name="leg"> to set the damping of").
+tinyxml2::XMLElement* Required(tinyxml2::XMLElement* root, const std::string& path,
+                               const char* tag, const char* name, const char* why) {
+  tinyxml2::XMLElement* e = FindNamed(root, tag, name);
+  if (e == nullptr) {
+    throw std::runtime_error("robot MJCF '" + path + "' has no <" + tag + " name=\"" + name +
+                             "\"> to set " + why);
+  }
+  return e;
+}
+
 // Makes the actuator `name` (a <motor> or <general>) deliver `gain` times what it is commanded:
 // a <motor> becomes the <general> it stands for (gainprm 1, no bias) with gainprm[0] scaled. The
 // gear stays (the controller checks it as a sign convention and does not read the gain).
@@ -145,22 +157,8 @@ void SetNumeric(tinyxml2::XMLElement* root, const std::string& path, const char*
 // Sets the damping of the <joint name="name">.
 void SetJointDamping(tinyxml2::XMLElement* root, const std::string& path, const char* name,
                      double damping) {
-  tinyxml2::XMLElement* joint = FindNamed(root, "joint", name);
-  if (joint == nullptr) {
-    throw std::runtime_error("robot MJCF '" + path + "' has no <joint name=\"" + name +
-                             "\"> to set the damping of");
-  }
-  joint->SetAttribute("damping", Number(damping).c_str());
-}
-
-// The <geom name="floor">, or an error naming what the variant needs it for.
-tinyxml2::XMLElement* Floor(tinyxml2::XMLElement* root, const std::string& path, const char* why) {
-  tinyxml2::XMLElement* floor = FindNamed(root, "geom", "floor");
-  if (floor == nullptr) {
-    throw std::runtime_error("robot MJCF '" + path + "' has no <geom name=\"floor\"> to set " +
-                             why);
-  }
-  return floor;
+  Required(root, path, "joint", name, "the damping of")
+      ->SetAttribute("damping", Number(damping).c_str());
 }
 
 // The floor turned about -y by alpha = -slope (a positive angle counter-clockwise seen with x
@@ -168,7 +166,7 @@ tinyxml2::XMLElement* Floor(tinyxml2::XMLElement* root, const std::string& path,
 // centre touches on the line z = x tan(alpha) through the origin (HopperParams::slope's
 // switching surface): pos = radius (sin alpha, 0, -cos alpha). The flat floor is this at 0.
 void SetSlope(tinyxml2::XMLElement* root, const std::string& path, double slope) {
-  tinyxml2::XMLElement* floor = Floor(root, path, "the slope of");
+  tinyxml2::XMLElement* floor = Required(root, path, "geom", "floor", "the slope of");
   tinyxml2::XMLElement* foot = FindNamed(root, "geom", "foot");
   const char* size = foot != nullptr ? foot->Attribute("size") : nullptr;
   const double radius = size != nullptr ? std::strtod(size, nullptr) : 0.0;
@@ -211,12 +209,10 @@ void SetContactTimeConstant(tinyxml2::XMLElement* root, const std::string& path,
                              " s (MuJoCo's smallest contact time constant; robot MJCF '" + path +
                              "' has timestep " + Number(timestep) + " s)");
   }
-  SetTimeConstant(Floor(root, path, "the contact time constant of"), timeconst);
-  tinyxml2::XMLElement* foot = FindNamed(root, "geom", "foot");
-  if (foot == nullptr) {
-    throw std::runtime_error("robot MJCF '" + path + "' has no <geom name=\"foot\"> to set the "
-                             "contact time constant of");
-  }
+  SetTimeConstant(Required(root, path, "geom", "floor", "the contact time constant of"),
+                  timeconst);
+  tinyxml2::XMLElement* foot =
+      Required(root, path, "geom", "foot", "the contact time constant of");
   if (foot->Attribute("solref") != nullptr) SetTimeConstant(foot, timeconst);
   const char* cls = foot->Attribute("class");
   if (cls != nullptr) {
@@ -362,12 +358,8 @@ std::string ExpandRobotMjcf(const std::string& path, const RobotVariant& variant
   if (variant.slope) SetSlope(root, path, *variant.slope);
   if (variant.contact_timeconst) SetContactTimeConstant(root, path, *variant.contact_timeconst);
   if (variant.r0) {
-    tinyxml2::XMLElement* foot = FindNamed(root, "body", "foot");
-    if (foot == nullptr) {
-      throw std::runtime_error("robot MJCF '" + path +
-                               "' has no <body name=\"foot\"> to set the leg's rest length r0 of");
-    }
-    foot->SetAttribute("pos", ("0 0 " + Number(-*variant.r0)).c_str());
+    Required(root, path, "body", "foot", "the leg's rest length r0 of")
+        ->SetAttribute("pos", ("0 0 " + Number(-*variant.r0)).c_str());
   }
   tinyxml2::XMLPrinter printer;
   doc.Print(&printer);

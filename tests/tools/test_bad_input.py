@@ -100,7 +100,6 @@ class BadInputTest(TempDirTest):
             self.assertEqual(p.returncode, 0, p.stderr)
             self.assertIn("summary.json: unreadable", p.stderr)
 
-
     def missing(self, module):
         """An environment whose interpreter cannot import `module`: a package of that name first on
         PYTHONPATH that fails to import the way an absent one does."""
