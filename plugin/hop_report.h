@@ -60,6 +60,8 @@ struct HopReport {
   bool restarted = false;    ///< TrialOutcome::restarted: the line search restarted after it
   bool remeasured = false;   ///< TrialOutcome::remeasured: the hop re-ran the nominal's law
   bool reverted = false;     ///< TrialOutcome::reverted: the harm guard abandoned the law after it
+  /// The learner's I1 reference was latched to the gait's state (ControllerConfig::overspeed_latch)
+  bool reference_latched = false;
   /// TrialOutcome::nominal_cost: the I^i that learner_cost was compared with (NaN: not judged)
   double nominal_cost = std::numeric_limits<double>::quiet_NaN();
   /// TrialOutcome::predicted: the predicted change dI_pred(alpha) of the trial (NaN: not judged)

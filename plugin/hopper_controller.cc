@@ -65,6 +65,15 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(c.reference_filter > 0.0 && c.reference_filter <= 1.0)) {
     fail("reference_filter", c.reference_filter, "in (0, 1]");
   }
+  if (!(c.overspeed_latch >= 0.0) || !std::isfinite(c.overspeed_latch)) {
+    fail("overspeed_latch", c.overspeed_latch, "finite and >= 0");
+  }
+  if (c.overspeed_latch > 0.0 &&
+      !(c.anchor_reference && c.anchor_weight < 1.0 && c.reference_filter < 1.0)) {
+    fail("overspeed_latch", c.overspeed_latch,
+         "0 unless the reference moves (anchor_reference, anchor_weight < 1, "
+         "reference_filter < 1)");
+  }
   if (!(c.pitch_experiment.scale >= 0.0 && c.pitch_experiment.scale <= 1.0)) {
     fail("pitch_experiment.scale", c.pitch_experiment.scale, "in [0, 1]");
   }
@@ -266,7 +275,8 @@ void HopperController::MakeDriver(int warmup) {
   }
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,
-      HopperCostReference(&cost_, anchor, config_.anchor_weight, config_.reference_filter));
+      HopperCostReference(&cost_, anchor, config_.anchor_weight, config_.reference_filter,
+                          config_.overspeed_latch, latched_));
   // The Initialize hop's pass sweeps its periodic value from u^0's fixed point on the model.
   driver_->SeedCyclicValue(cyclic_value_);
 }
@@ -742,6 +752,7 @@ void HopperController::RunOffline() {
   try {
     recorders_[1 - recording_].Finish(&trial_);
     outcome_ = driver_->CompleteTrial(trial_);
+    outcome_latched_ = *latched_;
     OnlineController* learned = driver_->learned_law();
     if (outcome_.learned && learned != nullptr && !pitch_scale_.empty()) {
       learned->SetStateFeedbackScale(job_hop_ + 1 >= config_.pitch_experiment.from_hop
@@ -798,6 +809,7 @@ void HopperController::TakeOfflineResult() {
     w.report.restarted = outcome_.restarted;
     w.report.remeasured = outcome_.remeasured;
     w.report.reverted = outcome_.reverted;
+    w.report.reference_latched = outcome_latched_;
     w.report.nominal_cost = outcome_.nominal_cost;
     w.report.predicted = outcome_.predicted;
     w.report.optimality = outcome_.optimality;

@@ -111,6 +111,10 @@ struct ControllerConfig {
   /// blend, s <- s + b (x(0) - s) from the gait's takeoff state (HopperCostReference); 1 = the
   /// hop's own start unfiltered. Default 1.
   double reference_filter = 1.0;
+  /// With anchor_weight < 1 and reference_filter < 1: once a learner's hop starts faster than the
+  /// gait's takeoff xd by more than this (m/s), the gait's state is I1's reference for the rest
+  /// of the run (until a re-solve of u^0); 0 = never. Default 0.
+  double overspeed_latch = 0.0;
   /// s from a hop's end until the law learned from it takes effect (u^0 runs meanwhile), in
   /// [0, durations.flight_min); 0 = learn inside Compute (synchronous). docs/design.md.
   double offline_latency = 0.02;
@@ -357,6 +361,8 @@ class HopperController {
   std::atomic<Job> job_{Job::kIdle};
   Trajectory trial_;                    // the handed-over hop (offline side)
   TrialOutcome outcome_;                // its result (offline side)
+  std::shared_ptr<bool> latched_ = std::make_shared<bool>(false);  // the overspeed latch (offline)
+  bool outcome_latched_ = false;        // *latched_ after the job (offline side)
   int job_hop_ = 0;                     // the hop handed over
   std::string offline_error_;           // what failed in the offline part
   std::vector<Waiting> waiting_;        // reports in hop order, until their outcome arrived

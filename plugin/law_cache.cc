@@ -408,7 +408,8 @@ std::string InitialLawKey(const ControllerConfig& c) {
   k.D("dt_model", c.dt_model);
   AddLearnerSettings(c.model_learner, &k);
   // Not read by the model solve: driver, contact, max_samples_per_mode, anchor_reference,
-  // anchor_weight, reference_filter, offline_latency, offline_thread, pitch_experiment, law_cache.
+  // anchor_weight, reference_filter, overspeed_latch, offline_latency, offline_thread,
+  // pitch_experiment, law_cache.
   return k.text();
 }
 

@@ -69,6 +69,7 @@ const HopColumn kHopColumns[] = {
     {"reverted", true, [](const HopReport& h) { return h.reverted ? 1.0 : 0.0; }},
     {"identified_mass", false, [](const HopReport& h) { return h.identified_mass; }},
     {"model_mass", false, [](const HopReport& h) { return h.model_mass; }},
+    {"latched", true, [](const HopReport& h) { return h.reference_latched ? 1.0 : 0.0; }},
     {"offline_ms", false, [](const HopReport& h) { return h.offline_ms; }},
     {"latency_ms", false, [](const HopReport& h) { return h.latency_ms; }},
     {"offline_steps", true,
@@ -473,7 +474,7 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,
 learner_cost, nominal_cost, predicted, optimality, stance_mass, reverted, identified_mass,
-model_mass) and offline_ms, latency_ms,
+model_mass, latched) and offline_ms, latency_ms,
 offline_steps, offline_cpu_ms (the wall time of the hop's offline part, the simulated latency of its
 law, the integration steps of its backward passes and its thread CPU time); 'trajectory', a dict of the columns of trajectory.csv (t, hop, phase, x, y, theta, phi, r, k_hip, k_leg, xd, yd,
 thetad, phid, rd, kd_hip, kd_leg, tau0, F0, k0_hip, k0_leg, push); method, fell, fall_reason,

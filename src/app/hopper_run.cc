@@ -137,6 +137,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.anchor_reference) config.anchor_reference = *l.anchor_reference;
   if (l.anchor_weight) config.anchor_weight = *l.anchor_weight;
   if (l.reference_filter) config.reference_filter = *l.reference_filter;
+  if (l.overspeed_latch) config.overspeed_latch = *l.overspeed_latch;
   const ExperimentOverrides& x = s.experiment;
   if (x.flight_pitch_feedback) config.pitch_experiment.scale = *x.flight_pitch_feedback;
   if (x.from_hop) config.pitch_experiment.from_hop = *x.from_hop;

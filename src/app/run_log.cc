@@ -87,7 +87,7 @@ RunLog::RunLog(const std::string& dir, std::string method) : dir_(dir), method_(
   events_ = OpenOrThrow(dir_ + "/events.csv");
   std::fputs("hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,"
              "du2,dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-             "optimality,stance_mass,reverted,identified_mass,model_mass\n", hops_);
+             "optimality,stance_mass,reverted,identified_mass,model_mass,latched\n", hops_);
   std::fputs("t,hop,phase,x,y,theta,phi,r,k_hip,k_leg,xd,yd,thetad,phid,rd,kd_hip,kd_leg,"
              "tau0,F0,k0_hip,k0_leg,push\n", trajectory_);
   std::fputs("t,hop,type,x,y,xd,yd\n", events_);
@@ -110,12 +110,13 @@ void RunLog::WriteHop(const plugin::HopReport& h) {
   errno = 0;
   const int n = std::fprintf(hops_,
                "%d,%.6f,%.6f,%.9g,%.9g,%.9g,%.9g,%.9g,%.6f,%.6f,%.6f,%.6f,%.6f,%.6g,%d,%.9g,%.9g,"
-               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f,%d,%.6f,%.6f\n",
+               "%s,%.9g,%d,%d,%.9g,%.9g,%.9g,%.9g,%.6f,%d,%.6f,%.6f,%d\n",
                h.hop, h.t_start, h.t_end, h.cost, h.terms.i1, h.terms.i2, h.terms.i3, h.terms.i4,
                h.t1, h.t2, h.step_length, h.speed, h.apex, h.alpha, h.accepted ? 1 : 0, h.du2,
                h.dt2, method_.c_str(), h.start_shift, h.restarted ? 1 : 0,
                h.remeasured ? 1 : 0, h.learner_cost, h.nominal_cost, h.predicted, h.optimality,
-               h.stance_mass, h.reverted ? 1 : 0, h.identified_mass, h.model_mass);
+               h.stance_mass, h.reverted ? 1 : 0, h.identified_mass, h.model_mass,
+               h.reference_latched ? 1 : 0);
   Check(hops_, "hops.csv", n >= 0 && std::fflush(hops_) == 0);
 }
 

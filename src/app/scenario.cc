@@ -102,6 +102,7 @@ const std::vector<ElementSpec>& Elements() {
         Number("alpha_initial", {0.0, 1.0, true, false}), Number("cyclic_value", Closed(0, 1)),
         Text("terminal"), Text("reference"), Number("anchor_weight", Closed(0, 1)),
         Number("reference_filter", {0.0, 1.0, true, false}),
+        Number("overspeed_latch", kNonNegative),
         Text("alpha_after_accept"), Integer("delta_i", 1),
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
@@ -295,6 +296,7 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   }
   l->anchor_weight = GetNumber(path, e, "anchor_weight");
   l->reference_filter = GetNumber(path, e, "reference_filter");
+  l->overspeed_latch = GetNumber(path, e, "overspeed_latch");
   if (auto v = GetChoice(path, e, "alpha_after_accept", "reset", "grow")) {
     l->reset_alpha_on_accept = *v == "reset";
   }

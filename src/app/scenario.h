@@ -61,6 +61,7 @@ struct LearningOverrides {
   std::optional<bool> anchor_reference;
   std::optional<double> anchor_weight;  // ControllerConfig::anchor_weight, in [0, 1]
   std::optional<double> reference_filter;  // ControllerConfig::reference_filter, in (0, 1]
+  std::optional<double> overspeed_latch;   // ControllerConfig::overspeed_latch, m/s, >= 0
   std::optional<bool> remeasure;        // remeasure="on": LearnerSettings::remeasure_nominal
   std::optional<double> noise_margin;   // LearnerSettings::noise_margin (with remeasure="on")
   std::optional<int> hops_per_trial;    // TrialDriverSettings::runs_per_trial, >= 1

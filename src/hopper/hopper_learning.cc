@@ -1,6 +1,7 @@
 // Copyright ddoc authors. Licensed under the Apache License, Version 2.0.
 #include "ddoc/hopper/hopper_learning.h"
 
+#include <cmath>
 #include <memory>
 
 #include "ddoc/policy.h"
@@ -82,7 +83,9 @@ void HopperPredictionPlant::Run(const ConstVectorRef& x0, Policy& policy, Trajec
 }
 
 TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor,
-                                               double anchor_weight, double filter) {
+                                               double anchor_weight, double filter,
+                                               double overspeed_latch,
+                                               std::shared_ptr<bool> latched) {
   if (!(anchor_weight >= 0.0 && anchor_weight <= 1.0)) {
     throw InvalidArgument("HopperCostReference: anchor_weight = " + std::to_string(anchor_weight) +
                           ", expected in [0, 1]");
@@ -91,22 +94,36 @@ TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& a
     throw InvalidArgument("HopperCostReference: filter = " + std::to_string(filter) +
                           ", expected in (0, 1]");
   }
+  if (!(overspeed_latch >= 0.0) || !std::isfinite(overspeed_latch)) {
+    throw InvalidArgument("HopperCostReference: overspeed_latch = " +
+                          std::to_string(overspeed_latch) + ", expected finite and >= 0");
+  }
   // The filtered start state s, from the anchor: s <- s + filter (x(0) - s) at each learner call.
   const bool moves = HopperReferenceMoves(anchor, anchor_weight, filter);
+  const bool latches = moves && overspeed_latch > 0.0;
   auto own = std::make_shared<Vector>(anchor);
-  return [cost, anchor, anchor_weight, filter, moves, own](const Trajectory& trial,
-                                                           bool for_learner) {
+  if (latched == nullptr) latched = std::make_shared<bool>(false);
+  *latched = false;
+  return [cost, anchor, anchor_weight, filter, moves, latches, overspeed_latch, own, latched](
+             const Trajectory& trial, bool for_learner) {
     if (!for_learner || anchor.size() == 0) {
       cost->SetReference(trial.x0);
-    } else if (anchor_weight == 1.0) {
-      cost->SetReference(anchor);
-    } else {
-      if (moves && trial.x0.size() == own->size() && trial.x0.allFinite()) {
-        *own += filter * (trial.x0 - *own);
-      }
-      const Vector& start = moves ? *own : trial.x0;
-      cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * start);
+      return;
     }
+    const bool finite = trial.x0.size() == anchor.size() && trial.x0.allFinite();
+    // Once a learner's hop starts faster than the gait by more than the latch, the gait's state
+    // is the reference from that hop on (docs/experiments.md, issue 45's overspeed latch).
+    if (latches && !*latched && finite &&
+        trial.x0(hopper::kXd) - anchor(hopper::kXd) > overspeed_latch) {
+      *latched = true;
+    }
+    if (anchor_weight == 1.0 || *latched) {
+      cost->SetReference(anchor);
+      return;
+    }
+    if (moves && finite) *own += filter * (trial.x0 - *own);
+    const Vector& start = moves ? *own : trial.x0;
+    cost->SetReference(anchor_weight * anchor + (1.0 - anchor_weight) * start);
   };
 }
 

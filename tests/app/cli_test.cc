@@ -268,9 +268,9 @@ TEST_F(CliTest, IdentifyReSolvesOnTheRobotsMass) {
     EXPECT_NEAR(id["resolves"][0]["mass"].get<double>(), 8.001, 0.01);
     EXPECT_NEAR(id["model_mass"].get<double>(), 8.001, 0.01);
     const std::string hops = ReadFile(dir_ / "on" / "hops.csv");
-    EXPECT_NE(hops.find("identified_mass,model_mass\n"), std::string::npos);
-    EXPECT_NE(hops.find(",10.000000\n"), std::string::npos) << "hop 0 ran the 10 kg model";
-    EXPECT_NE(hops.find(",8.001000\n"), std::string::npos) << "the last hop the identified one";
+    EXPECT_NE(hops.find("identified_mass,model_mass,latched\n"), std::string::npos);
+    EXPECT_NE(hops.find(",10.000000,0\n"), std::string::npos) << "hop 0 ran the 10 kg model";
+    EXPECT_NE(hops.find(",8.001000,0\n"), std::string::npos) << "the last hop the identified one";
   }
   const Result bad = RunCli(run + " --out " + Out("bad") + " --preset fast");
   EXPECT_EQ(bad.code, 2) << bad.output;
@@ -612,7 +612,7 @@ TEST_F(CliTest, ShortRunWritesEveryFile) {
   EXPECT_EQ(hops[0],
             "hop,t_start,t_end,cost,I1,I2,I3,I4,T1,T2,step_length,speed,apex,alpha,accepted,du2,"
             "dT2,method,start_shift,restarted,remeasured,learner_cost,nominal_cost,predicted,"
-            "optimality,stance_mass,reverted,identified_mass,model_mass");
+            "optimality,stance_mass,reverted,identified_mass,model_mass,latched");
   if (r.code == 0) EXPECT_EQ(hops.size(), 3u);
   // summary.json's mean_stance_mass is the mean of the hops' stance_mass (column 26), which
   // weighs the 8 kg robot's torso and leg (8.001 kg), not the model's 10 kg.

@@ -156,6 +156,12 @@ TEST_F(ScenarioTest, LearningTerminalAndInitialHops) {
   EXPECT_EQ(*s.learning.reference_filter, 0.1);
   ExpectError(Fill(fmt, "reference_filter='0'"), {"<learning>", "reference_filter", "0"});
   ExpectError(Fill(fmt, "reference_filter='1.5'"), {"<learning>", "reference_filter", "1.5"});
+  EXPECT_FALSE(s.learning.overspeed_latch.has_value());
+  s = LoadScenario(
+      Write(Fill(fmt, "anchor_weight='0' reference_filter='0.05' overspeed_latch='0.05'")));
+  ASSERT_TRUE(s.learning.overspeed_latch.has_value());
+  EXPECT_EQ(*s.learning.overspeed_latch, 0.05);
+  ExpectError(Fill(fmt, "overspeed_latch='-0.1'"), {"<learning>", "overspeed_latch", "-0.1"});
   ExpectError(Fill(fmt, "reference='nominal'"),
               {"<learning>", "reference=\"nominal\"", "own or gait"});
   ExpectError(Fill(fmt, "terminal='takeoff'"),
@@ -223,6 +229,11 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "reference_filter='0.2'"))),
                           HopperParams());
   EXPECT_DOUBLE_EQ(c.reference_filter, 0.2);
+  EXPECT_DOUBLE_EQ(c.overspeed_latch, 0.0);
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "anchor_weight='0' reference_filter='0.2' "
+                                                       "overspeed_latch='0.1'"))),
+                          HopperParams());
+  EXPECT_DOUBLE_EQ(c.overspeed_latch, 0.1);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "verify_hops='3' verify_interleave='on' verify_log='on' "
                                    "verify_when='worse' anchor_weight='0.8'"))),

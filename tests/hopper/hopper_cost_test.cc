@@ -229,5 +229,61 @@ TEST(HopperCostTest, TheFilteredReferenceFollowsTheHopsStartsAtItsGain) {
   }
 }
 
+// overspeed_latch d: the filtered reference until the first learner call whose start has xd above
+// the anchor's by more than d, then the anchor at every call, also for slower starts; a start
+// just under d faster, a slower one, a reported call, a NaN start or a latch without the moving
+// reference (b = 1) do not latch.
+TEST(HopperCostTest, TheOverspeedLatchHoldsTheGaitsStateOnceAHopStartsTooFast) {
+  const HopperModel model{HopperParams()};
+  HopperCost cost(model);
+  std::mt19937 rng(13);
+  const Eigen::VectorXd anchor = Random(14, &rng, 1.0);
+  const double w = 0.0, b = 0.5, d = 0.05;
+  const TrialDriver::CostReference ref = HopperCostReference(&cost, anchor, w, b, d);
+  Trajectory trial;
+  Eigen::VectorXd s = anchor;
+  // Not latched: slower by far, as fast, just under d faster, and a NaN start.
+  for (double dxd : {-0.5, 0.0, 0.99 * d}) {
+    trial.x0 = Random(14, &rng, 1.0);
+    trial.x0(hopper::kXd) = anchor(hopper::kXd) + dxd;
+    s += b * (trial.x0 - s);
+    ref(trial, true);
+    EXPECT_TRUE(cost.reference().isApprox(s, 1e-14)) << "latched at xd - gait " << dxd;
+  }
+  trial.x0(hopper::kXd) = anchor(hopper::kXd) + 1.0;
+  trial.x0(3) = std::numeric_limits<double>::quiet_NaN();
+  ref(trial, true);
+  EXPECT_TRUE(cost.reference().isApprox(s, 1e-14)) << "a NaN start latched";
+  trial.x0(3) = 0.0;
+  ref(trial, false);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), trial.x0) << "reported cost";
+  // The fast start latches (the reported call before it did not), and the latch holds.
+  trial.x0(hopper::kXd) = anchor(hopper::kXd) + 1.5 * d;
+  ref(trial, true);
+  EXPECT_EQ(Eigen::VectorXd(cost.reference()), anchor) << "not latched at 1.5 d";
+  for (double dxd : {-0.5, 0.0}) {
+    trial.x0 = Random(14, &rng, 1.0);
+    trial.x0(hopper::kXd) = anchor(hopper::kXd) + dxd;
+    ref(trial, false);
+    EXPECT_EQ(Eigen::VectorXd(cost.reference()), trial.x0) << "reported cost after the latch";
+    ref(trial, true);
+    EXPECT_EQ(Eigen::VectorXd(cost.reference()), anchor) << "the latch let go at " << dxd;
+  }
+  // Without a moving reference there is nothing to latch: the unfiltered blend (b = 1) stays.
+  trial.x0 = Random(14, &rng, 1.0);
+  trial.x0(hopper::kXd) = anchor(hopper::kXd) + 1.0;
+  HopperCostReference(&cost, anchor, 0.5, 1.0, d)(trial, true);
+  EXPECT_TRUE(cost.reference().isApprox(0.5 * anchor + 0.5 * trial.x0, 1e-14));
+  for (double bad : {-0.1, std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::infinity()}) {
+    try {
+      HopperCostReference(&cost, anchor, w, b, bad);
+      ADD_FAILURE() << "no error for overspeed_latch " << bad;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("overspeed_latch"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace ddoc

@@ -62,6 +62,18 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   bad_filter.reference_filter = 0.0;
   EXPECT_EQ(HopperController::Create(model.get(), bad_filter, &error), nullptr);
   EXPECT_NE(error.find("reference_filter = 0, expected in (0, 1]"), std::string::npos) << error;
+  ControllerConfig bad_latch;
+  bad_latch.overspeed_latch = -0.05;
+  EXPECT_EQ(HopperController::Create(model.get(), bad_latch, &error), nullptr);
+  EXPECT_NE(error.find("overspeed_latch = -0.05, expected finite and >= 0"), std::string::npos)
+      << error;
+  // A latch needs the moving reference it latches: with the gait's state alone it is an error.
+  ControllerConfig idle_latch;
+  idle_latch.overspeed_latch = 0.05;
+  EXPECT_EQ(HopperController::Create(model.get(), idle_latch, &error), nullptr);
+  EXPECT_NE(error.find("overspeed_latch = 0.05, expected 0 unless the reference moves"),
+            std::string::npos)
+      << error;
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
@@ -510,6 +522,33 @@ TEST(HopperControllerTest, AFilteredReferenceShiftsTheNominalsCost) {
       EXPECT_EQ(shifted, 0);
     } else {
       EXPECT_EQ(shifted, 5);
+    }
+  }
+}
+
+TEST(HopperControllerTest, TheOverspeedLatchHoldsTheGaitOnARobotThatRunsAway) {
+  // With the filtered reference, the 12 kg robot under the 10 kg model's laws starts its second
+  // hop about 0.15 m/s faster than the model gait: a latch of 0.05 m/s holds from that hop on,
+  // one of 1 m/s never comes, and 0 is off.
+  for (double latch : {0.0, 0.05, 1.0}) {
+    ControllerConfig config;
+    config.anchor_weight = 0.0;
+    config.reference_filter = 0.05;
+    config.overspeed_latch = latch;
+    Robot rig("hopper_m12.xml", config, false);
+    ASSERT_TRUE(rig.ok());
+    const std::vector<HopReport> reports = rig.Run(6, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 6u);
+    int first = -1;
+    for (const HopReport& r : reports) {
+      if (first >= 0) EXPECT_TRUE(r.reference_latched) << "let go at hop " << r.hop;
+      if (r.reference_latched && first < 0) first = r.hop;
+    }
+    if (latch == 0.05) {
+      EXPECT_GE(first, 1) << "latched in the Initialize hop";
+      EXPECT_LE(first, 3) << "latched late, or never (-1)";
+    } else {
+      EXPECT_EQ(first, -1) << "latch " << latch;
     }
   }
 }

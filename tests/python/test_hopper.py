@@ -30,7 +30,7 @@ FORMATS = [("hop", "%d"), ("t_start", "%.6f"), ("t_end", "%.6f"), ("cost", "%.9g
            ("start_shift", "%.9g"), ("restarted", "%d"), ("remeasured", "%d"),
            ("learner_cost", "%.9g"), ("nominal_cost", "%.9g"), ("predicted", "%.9g"),
            ("optimality", "%.9g"), ("stance_mass", "%.6f"), ("reverted", "%d"),
-           ("identified_mass", "%.6f"), ("model_mass", "%.6f")]
+           ("identified_mass", "%.6f"), ("model_mass", "%.6f"), ("latched", "%d")]
 
 
 # trajectory.csv's columns and formats (RunLog::WriteSample): t, hop, phase, 14 coordinates and

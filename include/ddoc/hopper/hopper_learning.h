@@ -5,6 +5,8 @@
 #ifndef DDOC_HOPPER_HOPPER_LEARNING_H_
 #define DDOC_HOPPER_HOPPER_LEARNING_H_
 
+#include <memory>
+
 #include "ddoc/hopper/hopper_cost.h"
 #include "ddoc/hopper/hopper_model.h"
 #include "ddoc/hopper/nominal_gait.h"
@@ -79,10 +81,15 @@ class HopperPredictionPlant : public Plant {
 /// (1 - w) x(0). With `filter` b < 1 (and w < 1) x(0) is replaced by s, the robot's own start
 /// state filtered over the learner's trials: s <- s + b (x(0) - s) at each call with for_learner,
 /// s = anchor at first; the reference then moves between trials (LearnerSettings::
-/// reference_shift). Throws InvalidArgument for w outside [0, 1] or b outside (0, 1]. `cost`
-/// must outlive the driver.
+/// reference_shift). With that moving reference and `overspeed_latch` d > 0, the first learner
+/// call whose x(0) has xd above anchor's by more than d (m/s) latches: anchor is the reference
+/// from that call on. Throws InvalidArgument for w outside [0, 1], b outside (0, 1] or d < 0 or
+/// not finite. `latched`, if given, holds the latch's state (written by the reference's calls).
+/// `cost` must outlive the driver.
 TrialDriver::CostReference HopperCostReference(HopperCost* cost, const Vector& anchor = Vector(),
-                                               double anchor_weight = 1.0, double filter = 1.0);
+                                               double anchor_weight = 1.0, double filter = 1.0,
+                                               double overspeed_latch = 0.0,
+                                               std::shared_ptr<bool> latched = nullptr);
 
 /// Whether HopperCostReference(cost, anchor, anchor_weight, filter) moves the learner's reference
 /// between trials (the filtered own state: anchor given, w < 1, b < 1); a learner given that
