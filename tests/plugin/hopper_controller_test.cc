@@ -35,71 +35,59 @@ void ExpectInputInBounds(const HopperController& c) {
 TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   MjModelPtr model = LoadMjcf(ModelPath("hopper.xml"));
   std::string error;
+  // Create fails, and its error names what is wrong.
+  auto rejected = [&](const ControllerConfig& config, const std::string& names) {
+    EXPECT_EQ(HopperController::Create(model.get(), config, &error), nullptr) << names;
+    EXPECT_NE(error.find(names), std::string::npos) << error;
+  };
   EXPECT_EQ(HopperController::Create(nullptr, {}, &error), nullptr);
   EXPECT_NE(error.find("mjModel is null"), std::string::npos) << error;
 
   ControllerConfig reversed;
   reversed.durations.flight_min = 2.0;  // > flight_max = 1.5
-  EXPECT_EQ(HopperController::Create(model.get(), reversed, &error), nullptr);
-  EXPECT_NE(error.find("duration"), std::string::npos) << error;
+  rejected(reversed, "duration");
 
   ControllerConfig bad_pitch;
   bad_pitch.pitch_experiment.scale = 1.5;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("pitch_experiment.scale = 1.5, expected in [0, 1]"), std::string::npos)
-      << error;
+  rejected(bad_pitch, "pitch_experiment.scale = 1.5, expected in [0, 1]");
   bad_pitch.pitch_experiment.scale = 0.5;
   bad_pitch.pitch_experiment.from_hop = -1;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_pitch, &error), nullptr);
-  EXPECT_NE(error.find("pitch_experiment.from_hop = -1, expected >= 0"), std::string::npos)
-      << error;
+  rejected(bad_pitch, "pitch_experiment.from_hop = -1, expected >= 0");
 
   ControllerConfig bad_anchor;
   bad_anchor.anchor_weight = 1.5;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_anchor, &error), nullptr);
-  EXPECT_NE(error.find("anchor_weight = 1.5, expected in [0, 1]"), std::string::npos) << error;
+  rejected(bad_anchor, "anchor_weight = 1.5, expected in [0, 1]");
   ControllerConfig bad_filter;
   bad_filter.reference_filter = 0.0;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_filter, &error), nullptr);
-  EXPECT_NE(error.find("reference_filter = 0, expected in (0, 1]"), std::string::npos) << error;
+  rejected(bad_filter, "reference_filter = 0, expected in (0, 1]");
   ControllerConfig bad_latch;
   bad_latch.overspeed_latch = -0.05;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_latch, &error), nullptr);
-  EXPECT_NE(error.find("overspeed_latch = -0.05, expected finite and >= 0"), std::string::npos)
-      << error;
+  rejected(bad_latch, "overspeed_latch = -0.05, expected finite and >= 0");
   // A latch needs the moving reference it latches: with the gait's state alone it is an error.
   ControllerConfig idle_latch;
   idle_latch.overspeed_latch = 0.05;
-  EXPECT_EQ(HopperController::Create(model.get(), idle_latch, &error), nullptr);
-  EXPECT_NE(error.find("overspeed_latch = 0.05, expected 0 unless the reference moves"),
-            std::string::npos)
-      << error;
+  rejected(idle_latch, "overspeed_latch = 0.05, expected 0 unless the reference moves");
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
-  EXPECT_EQ(HopperController::Create(model.get(), bad_latency, &error), nullptr);
-  EXPECT_NE(error.find("offline_latency = 0.06"), std::string::npos) << error;
+  rejected(bad_latency, "offline_latency = 0.06");
 
   for (double bad : {-1e-6, std::nan("")}) {
     ControllerConfig bad_model_latency;
     bad_model_latency.offline_step_seconds = bad;
-    EXPECT_EQ(HopperController::Create(model.get(), bad_model_latency, &error), nullptr);
-    EXPECT_NE(error.find("offline_step_seconds"), std::string::npos) << error;
+    rejected(bad_model_latency, "offline_step_seconds");
     bad_model_latency = ControllerConfig();
     bad_model_latency.offline_hop_seconds = bad;
-    EXPECT_EQ(HopperController::Create(model.get(), bad_model_latency, &error), nullptr);
-    EXPECT_NE(error.find("offline_hop_seconds"), std::string::npos) << error;
+    rejected(bad_model_latency, "offline_hop_seconds");
   }
 
   ControllerConfig bad_warmup;
   bad_warmup.driver.warmup_trials = 0;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_warmup, &error), nullptr);
-  EXPECT_NE(error.find("warmup_trials = 0"), std::string::npos) << error;
+  rejected(bad_warmup, "warmup_trials = 0");
 
   ControllerConfig bad_model;
   bad_model.model.M = -1.0;
-  EXPECT_EQ(HopperController::Create(model.get(), bad_model, &error), nullptr);
-  EXPECT_NE(error.find("M"), std::string::npos) << error;
+  rejected(bad_model, "M");
 
   // A model that is not the hopper: the mapping names the missing element.
   const std::string path = ::testing::TempDir() + "ddoc_not_a_hopper.xml";
