@@ -95,6 +95,9 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(id.resolve_latency >= 0.0) || !std::isfinite(id.resolve_latency)) {
     fail("identification.resolve_latency", id.resolve_latency, "finite and >= 0");
   }
+  if (!(id.min_predicted_decrease >= 0.0) || !std::isfinite(id.min_predicted_decrease)) {
+    fail("identification.min_predicted_decrease", id.min_predicted_decrease, "finite and >= 0");
+  }
   const TermsIdentification::Resolution& res = id.term_resolution;
   for (const auto& [name, value] : {std::pair{"b_leg", res.b_leg}, {"b_hip", res.b_hip},
                                     {"inertia", res.inertia}, {"slope", res.slope}}) {
@@ -272,6 +275,12 @@ void HopperController::MakeDriver(int warmup) {
   const Vector anchor = config_.anchor_reference ? Vector(gait_.x0) : Vector();
   if (HopperReferenceMoves(anchor, config_.anchor_weight, config_.reference_filter)) {
     settings.learner.reference_shift = true;
+  }
+  const IdentificationSettings& id = config_.identification;
+  if ((id.mass || id.terms) && id.model_law) {
+    settings.learner.blend_feedforward = settings.learner.blend_feedback;
+    settings.learner.min_predicted_decrease =
+        std::max(settings.learner.min_predicted_decrease, id.min_predicted_decrease);
   }
   driver_ = std::make_unique<TrialDriver>(
       problem_, settings, fallback_, mrl ? &prediction_plant_ : nullptr,

@@ -79,6 +79,14 @@ struct IdentificationSettings {
   /// the new u^0 takes over in the next flight. A cold solve takes 0.5-50 s instead;
   /// ModelResolve::wall_ms says what this computer took.
   double resolve_latency = 0.1;
+  /// With `mass` or `terms` on, the learner trusts the identified model's law: its trials tend
+  /// to the law that produced the nominal exactly as alpha -> 0, clamping at the input bounds
+  /// included (LearnerSettings::blend_feedforward), and take no step predicted to gain less than
+  /// min_predicted_decrease |I^i|. Default true (docs/experiments.md, "The law at alpha -> 0 on an
+  /// identified model").
+  bool model_law = true;
+  /// With model_law: LearnerSettings::min_predicted_decrease of the learner, >= 0; default 0.01.
+  double min_predicted_decrease = 0.01;
 
   static MassIdentification::Settings DefaultEstimator() {
     MassIdentification::Settings s;

@@ -37,7 +37,7 @@ static_assert(sizeof(BackwardPassSettings) == 56, "BackwardPassSettings changed:
 static_assert(sizeof(SwitchingTimeSettings) == 16, "SwitchingTimeSettings changed: update the key");
 static_assert(sizeof(BoxQPSettings) == 48, "BoxQPSettings changed: update InitialLawKey");
 static_assert(sizeof(OnlineControllerSettings) == 80, "OnlineControllerSettings changed: update");
-static_assert(sizeof(LearnerSettings) == 320, "LearnerSettings changed: update InitialLawKey");
+static_assert(sizeof(LearnerSettings) == 328, "LearnerSettings changed: update InitialLawKey");
 #endif
 
 std::uint64_t Fnv1a(const char* data, std::size_t n, std::uint64_t h = 0xcbf29ce484222325ULL) {
@@ -150,6 +150,10 @@ void AddLearnerSettings(const LearnerSettings& s, KeyText* k) {
   k->B("learner.remeasure_nominal", s.remeasure_nominal);
   k->D("learner.noise_margin", s.noise_margin);
   k->B("learner.blend_feedback", s.blend_feedback);
+  if (s.blend_feedforward) k->B("learner.blend_feedforward", true);  // older keys hold
+  if (s.min_predicted_decrease != 0.0) {
+    k->D("learner.min_predicted_decrease", s.min_predicted_decrease);
+  }
   k->I("learner.max_trials", s.max_trials);
   k->I("learner.max_samples", s.max_samples);
   const BackwardPassSettings& b = s.backward;

@@ -121,6 +121,14 @@ struct LearnerSettings {
   /// OnlineController::BlendStateFeedback; the feed-forward and dT are (33)-(34)'s. Default
   /// false (the pass's gains, the paper). docs/engine.md, "The trial's feedback".
   bool blend_feedback = false;
+  /// With blend_feedback: the trial's feed-forward also moves to the nominal law's own command,
+  /// by (1 - w) of its difference from the nominal's measured input, so that at alpha = 0 a
+  /// trial is pi^i from any start with pi^i's clamping at the input bounds (docs/engine.md,
+  /// "The trial's feedback"). Default false.
+  bool blend_feedforward = false;
+  /// A trial whose predicted decrease is below this fraction of |I^i| is not accepted, whatever
+  /// it measured ((36) cannot tell such a step from the noise of the plant); >= 0, default 0.
+  double min_predicted_decrease = 0.0;
   int max_trials = 500;         ///< batch Solve: maximum number of trials (plant runs)
   /// Preallocation: most samples of one trajectory (all modes). Solve raises it, before the
   /// first trial, to 1.25x the initial trial's samples + 8 K when that trial has more (e.g. 12 s

@@ -126,9 +126,13 @@ class OnlineController : public Policy {
   /// which the nominal passed it (the nominal's durations; `law`'s planned durations). The
   /// feed-forward and the dT part stay. w in [0, 1]; w = 0 gives `law`'s feedback
   /// -H_law^{-1} G_law dx inside this law's box QP; a sample where H_law is not positive
-  /// definite keeps this law's gain. Bad input throws before anything changes. No allocation.
+  /// definite keeps this law's gain. With `feedforward` the unconstrained step also moves by
+  /// (1 - w) e, e = `law`'s unconstrained command at the nominal's state minus the nominal's
+  /// input (c <- c - (1 - w) H e): at w = 0 this law's answer from any state is `law`'s own
+  /// unconstrained command plus this law's step, and (with the same H) `law`'s clamped command
+  /// when the step is 0. Bad input throws before anything changes. No allocation.
   /// docs/engine.md, "The trial's feedback".
-  void BlendStateFeedback(const OnlineController& law, double w);
+  void BlendStateFeedback(const OnlineController& law, double w, bool feedforward = false);
 
  private:
   // From the interval *j of mode k (in, out), finds j with tau_j <= tau <= tau_{j+1}; returns
@@ -179,6 +183,9 @@ class OnlineController : public Policy {
   // controller's tau_, nominal_T_ and counts as they were (the learner blends every trial of a
   // nominal with the same law).
   Matrix blend_g_;
+  // The same samples' e (m x S): `law`'s unconstrained command at x^i(tau) minus u^i(tau).
+  Matrix blend_e_;
+  Vector blend_dx_;  // n_max: x^i(tau) - `law`'s state there
   std::vector<char> blend_ok_;
   std::uint64_t blend_law_revision_ = 0;
   Vector blend_tau_, blend_T_;

@@ -124,6 +124,8 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.verify_when_worse) config.driver.guard.only_when_worse = *l.verify_when_worse;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
+  if (l.blend_feedforward) learner.blend_feedforward = *l.blend_feedforward;
+  if (l.min_predicted_decrease) learner.min_predicted_decrease = *l.min_predicted_decrease;
   if (l.start_correction) learner.start_correction = *l.start_correction;
   if (l.restart_alpha) learner.restart_alpha = *l.restart_alpha;
   // The regularization mu, the cyclic value and the terminal condition apply to both learners
@@ -148,6 +150,10 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (s.settle_cost) config.identification.settle_cost = *s.settle_cost;
   if (s.settle_hops_max) config.identification.settle_hops_max = *s.settle_hops_max;
   if (s.resolve_latency) config.identification.resolve_latency = *s.resolve_latency;
+  if (s.model_law) config.identification.model_law = *s.model_law;
+  if (s.id_min_predicted_decrease) {
+    config.identification.min_predicted_decrease = *s.id_min_predicted_decrease;
+  }
   return config;
 }
 

@@ -106,7 +106,8 @@ const std::vector<ElementSpec>& Elements() {
         Text("alpha_after_accept"), Integer("delta_i", 1),
         Integer("initial_hops", 1), Text("preset"), Text("remeasure"),
         Number("noise_margin", kNonNegative), Integer("hops_per_trial", 1),
-        Text("blend_feedback"), Text("start_correction"),
+        Text("blend_feedback"), Text("blend_feedforward"),
+        Number("min_predicted_decrease", kNonNegative), Text("start_correction"),
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
         Number("verify_margin", kNonNegative), Text("verify_debias"), Text("verify_interleave"),
         Text("verify_log"), Text("verify_when"), Integer("watch_hops", 0),
@@ -117,7 +118,8 @@ const std::vector<ElementSpec>& Elements() {
       {"identification", false,
        {Text("mass"), Text("terms"), Integer("settle_hops", 0),
         Number("settle_cost", kNonNegative), Integer("settle_hops_max", 0),
-        Number("resolve_latency", kNonNegative)}},
+        Number("resolve_latency", kNonNegative), Text("model_law"),
+        Number("min_predicted_decrease", kNonNegative)}},
       {"gait", false,
        {Number("speed"), Number("k0_hip", Closed(lo(hopper::kK0hip), hi(hopper::kK0hip))),
         Number("k0_leg", Closed(lo(hopper::kK0leg), hi(hopper::kK0leg)))}},
@@ -306,6 +308,10 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
   l->noise_margin = GetNumber(path, e, "noise_margin");
   l->hops_per_trial = GetInteger(path, e, "hops_per_trial");
   if (auto v = GetChoice(path, e, "blend_feedback", "off", "on")) l->blend_feedback = *v == "on";
+  if (auto v = GetChoice(path, e, "blend_feedforward", "off", "on")) {
+    l->blend_feedforward = *v == "on";
+  }
+  l->min_predicted_decrease = GetNumber(path, e, "min_predicted_decrease");
   if (auto v = GetChoice(path, e, "start_correction", "off", "on")) {
     l->start_correction = *v == "on";
   }
@@ -378,6 +384,8 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
     s->settle_cost = GetNumber(path, e, "settle_cost");
     s->settle_hops_max = GetInteger(path, e, "settle_hops_max");
     s->resolve_latency = GetNumber(path, e, "resolve_latency");
+    if (auto v = GetChoice(path, e, "model_law", "off", "on")) s->model_law = *v == "on";
+    s->id_min_predicted_decrease = GetNumber(path, e, "min_predicted_decrease");
   } else if (tag == "gait") {
     s->forward_speed = GetNumber(path, e, "speed").value_or(0.0);
     s->gait_k0_hip = GetNumber(path, e, "k0_hip");

@@ -74,6 +74,8 @@ struct LearningOverrides {
   std::optional<bool> verify_when_worse;  // HarmGuardSettings::only_when_worse
   std::optional<double> curvature_scale_min;  // LearnerSettings::curvature_scale_min, (0, 1]
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
+  std::optional<bool> blend_feedforward;  // "on"/"off": LearnerSettings::blend_feedforward
+  std::optional<double> min_predicted_decrease;  // LearnerSettings::min_predicted_decrease, >= 0
   std::optional<bool> start_correction;  // "on"/"off": LearnerSettings::start_correction
   std::optional<double> restart_alpha;   // LearnerSettings::restart_alpha, in (0, 1]
 };
@@ -116,14 +118,16 @@ struct Scenario {
   // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
   std::optional<bool> substep_events;
   // <identification mass="on|off" terms="on|off" settle_hops="N" settle_cost="F"
-  // settle_hops_max="N" resolve_latency="S"/>: IdentificationSettings (unset: off, off, 2, 2,
-  // 30, 0.1 s)
+  // settle_hops_max="N" resolve_latency="S" model_law="on|off" min_predicted_decrease="F"/>:
+  // IdentificationSettings (unset: off, off, 2, 2, 30, 0.1 s, on, 0.01)
   std::optional<bool> identify_mass;
   std::optional<bool> identify_terms;
   std::optional<int> settle_hops;
   std::optional<double> settle_cost;
   std::optional<int> settle_hops_max;
   std::optional<double> resolve_latency;
+  std::optional<bool> model_law;
+  std::optional<double> id_min_predicted_decrease;
 };
 
 /// Reads a scenario file; throws ScenarioError naming the file, line and element.

@@ -137,6 +137,11 @@ Learner::Learner(const Problem& problem, const LearnerSettings& settings)
                "restart_alpha must be in [0, 1]");
   CheckSetting(settings.noise_margin >= 0 && std::isfinite(settings.noise_margin),
                "noise_margin must be finite and >= 0");
+  CheckSetting(settings.min_predicted_decrease >= 0 &&
+                   std::isfinite(settings.min_predicted_decrease),
+               "min_predicted_decrease must be finite and >= 0");
+  CheckSetting(!settings.blend_feedforward || settings.blend_feedback,
+               "blend_feedforward needs blend_feedback");
   CheckSetting(settings.delta_i >= 1, "delta_i must be >= 1");
   CheckSetting(settings.failure_raises >= 0, "failure_raises must be >= 0");
   CheckSetting(settings.curvature_scale_min > 0 && settings.curvature_scale_min <= 1,
@@ -515,7 +520,8 @@ OnlineController& Learner::NextTrial() {
         accepted_ >= 0 ? &controllers_[accepted_] : initial_law_;
     if (nominal_law != nullptr && nominal_law->loaded()) {
       controllers_[active_].BlendStateFeedback(*nominal_law,
-                                               std::min(1.0, alpha_ / settings_.alpha_initial));
+                                               std::min(1.0, alpha_ / settings_.alpha_initial),
+                                               settings_.blend_feedforward);
     }
   }
   trial_pending_ = true;
@@ -673,6 +679,12 @@ TrialResult Learner::CompleteTrial(const Trajectory& measured, Plant* direction_
     r.accepted = std::isfinite(r.cost) &&
                  (r.predicted < 0 ? r.decrease <= settings_.c * r.predicted - margin
                                   : r.decrease <= -margin);
+  }
+  // A step predicted to gain less than min_predicted_decrease |I^i| is not one (36) can tell
+  // from the plant's noise: adopting it would only replace the nominal by another sample.
+  const double floor = settings_.min_predicted_decrease * std::abs(nominal_cost_);
+  if (settings_.min_predicted_decrease > 0 && r.accepted && !(r.predicted < -floor)) {
+    r.accepted = false;
   }
   if (r.accepted && !AdoptTrial(measured, direction_plant, r.cost)) r.accepted = false;
   if (r.accepted) {

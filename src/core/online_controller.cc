@@ -254,7 +254,8 @@ void OnlineController::ImportLaw(const OnlineControllerLaw& law) {
   BeginTrial();
 }
 
-void OnlineController::BlendStateFeedback(const OnlineController& law, double w) {
+void OnlineController::BlendStateFeedback(const OnlineController& law, double w,
+                                          bool feedforward) {
   const char* what = "OnlineController::BlendStateFeedback: ";
   if (!loaded_ || !law.loaded_) {
     throw InvalidArgument(std::string(what) + "both laws must be loaded");
@@ -284,6 +285,8 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
   if (blend_g_.cols() < S) {  // the first blend, or a nominal with more samples: allocates
     const Eigen::Index cols = S + S / 4;
     blend_g_.resize(blend_g_.rows(), cols);
+    blend_e_.setZero(m_, cols);
+    blend_dx_.resize(x_.rows());
     blend_ok_.assign(static_cast<size_t>(cols), 0);
     blend_tau_.resize(cols);
     blend_law_revision_ = 0;
@@ -311,6 +314,15 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
       llt_.compute(H_);
       blend_ok_[s] = llt_.info() == Eigen::Success;  // else no feedback to take: keep this law's
       if (!blend_ok_[s]) continue;
+      // e = law's unconstrained command at x^i(tau) minus the nominal's input there.
+      auto dx = blend_dx_.head(n);
+      dx = x_.col(s).head(n) - ((1.0 - a) * law.x_.col(s0).head(n) + a * law.x_.col(s1).head(n));
+      b_ = (1.0 - a) * law.c_.col(s0) + a * law.c_.col(s1);
+      b_.noalias() += g * dx;
+      auto e = blend_e_.col(s);
+      e = (1.0 - a) * law.u_.col(s0) + a * law.u_.col(s1) - u_.col(s);
+      llt_.solveInPlace(b_);
+      e -= b_;
       llt_.solveInPlace(g);
     }
   }
@@ -328,8 +340,9 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w)
       const Eigen::Map<const Matrix> g(blend_g_.col(s).data(), m_, n);  // H_law^{-1} G_law
       Eigen::Map<Matrix> K(Kx_.col(s).data(), m_, n);
       K *= w;
-      K.noalias() += ((1.0 - w) / feedback_factor_) *
-                     (Eigen::Map<const Matrix>(huu_.col(s).data(), m_, m_) * g);
+      const Eigen::Map<const Matrix> H(huu_.col(s).data(), m_, m_);
+      K.noalias() += ((1.0 - w) / feedback_factor_) * (H * g);
+      if (feedforward) c_.col(s).noalias() -= (1.0 - w) * (H * blend_e_.col(s));
     }
   }
   revision_ = NextRevision();

@@ -204,6 +204,19 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   s = LoadScenario(Write(Fill(fmt, "blend_feedback='off'")));
   EXPECT_FALSE(ControllerConfigFor(s, HopperParams()).driver.learner.blend_feedback);
   ExpectError(Fill(fmt, "blend_feedback='1'"), {"<learning>", "blend_feedback=\"1\"", "off or on"});
+  // blend_feedforward and min_predicted_decrease: off and 0 unless set.
+  EXPECT_FALSE(c.driver.learner.blend_feedforward);
+  EXPECT_EQ(c.driver.learner.min_predicted_decrease, 0.0);
+  l = ControllerConfigFor(
+          LoadScenario(Write(Fill(fmt, "blend_feedforward='on' min_predicted_decrease='0.02'"))),
+          HopperParams())
+          .driver.learner;
+  EXPECT_TRUE(l.blend_feedforward);
+  EXPECT_EQ(l.min_predicted_decrease, 0.02);
+  ExpectError(Fill(fmt, "blend_feedforward='yes'"),
+              {"<learning>", "blend_feedforward=\"yes\"", "off or on"});
+  ExpectError(Fill(fmt, "min_predicted_decrease='-1'"),
+              {"<learning>", "min_predicted_decrease = -1"});
   ExpectError(Fill(fmt, "noise_margin='-1'"), {"noise_margin"});
   s = LoadScenario(Write(Fill(fmt, "hops_per_trial='3'")));
   EXPECT_EQ(ControllerConfigFor(s, HopperParams()).driver.runs_per_trial, 3);
@@ -285,6 +298,16 @@ TEST_F(ScenarioTest, Identification) {
   EXPECT_EQ(c.identification.settle_cost, 2.0);
   EXPECT_EQ(c.identification.settle_hops_max, 30);
   EXPECT_EQ(c.identification.resolve_latency, 0.1);
+  EXPECT_TRUE(c.identification.model_law);
+  EXPECT_EQ(c.identification.min_predicted_decrease, 0.01);
+  c = ControllerConfigFor(
+      LoadScenario(Write(Fill(fmt, "mass='on' model_law='off' min_predicted_decrease='0.05'"))),
+      HopperParams());
+  EXPECT_FALSE(c.identification.model_law);
+  EXPECT_EQ(c.identification.min_predicted_decrease, 0.05);
+  ExpectError(Fill(fmt, "model_law='1'"), {"<identification>", "model_law=\"1\"", "off or on"});
+  ExpectError(Fill(fmt, "min_predicted_decrease='-2'"),
+              {"<identification>", "min_predicted_decrease = -2"});
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "mass='on' settle_hops='0' settle_cost='2.5' "
                                    "settle_hops_max='7' resolve_latency='0.5'"))),
@@ -306,7 +329,7 @@ TEST_F(ScenarioTest, Identification) {
   ExpectError(Fill(fmt, "drag='on'"),
               {"<identification>", "unknown attribute drag",
                "expected mass, terms, settle_hops, settle_cost, settle_hops_max, "
-               "resolve_latency"});
+               "resolve_latency, model_law, min_predicted_decrease"});
 }
 
 TEST_F(ScenarioTest, BadInputNamesTheProblem) {

@@ -631,6 +631,50 @@ TEST(Learner, RemeasuringTheNominalEndsTheRuleOfALuckyHop) {
   }
 }
 
+// min_predicted_decrease: a trial at alpha 1e-4 from a luckier start (a third of the usual
+// x0) measures far below I^i although its step is predicted to gain almost nothing: without the
+// floor (36) accepts it and the nominal becomes that hop; with a floor of 1 % of I^i it is
+// rejected, and so is every trial whose |predicted| is below 1 % of I^i. The full step from the
+// usual start is predicted to gain more than 1 % and is accepted either way.
+TEST(Learner, AStepPredictedBelowTheFloorIsNotAccepted) {
+  FineLq f;
+  Trajectory measured;
+  for (const double floor : {0.0, 0.01}) {
+    SCOPED_TRACE(floor);
+    LearnerSettings settings = FineLq::Settings(false);
+    settings.min_predicted_decrease = floor;
+    settings.alpha_initial = 1e-4;
+    settings.alpha_min = 1e-6;
+    Learner tiny(f.p.problem, settings);
+    tiny.Initialize(f.nominal);
+    const double nominal = tiny.nominal_cost();
+    f.plant.Run(f.lq.x0 / 3.0, tiny.NextTrial(), &measured);
+    const TrialResult lucky = tiny.CompleteTrial(measured);
+    ASSERT_LT(lucky.decrease, -0.2 * nominal);  // the start, not the step
+    ASSERT_GT(lucky.predicted, -0.01 * nominal);
+    ASSERT_LT(lucky.predicted, 0.0);
+    EXPECT_EQ(lucky.accepted, floor == 0.0);
+    EXPECT_EQ(tiny.nominal_cost() == nominal, floor > 0.0);
+
+    settings.alpha_initial = 1.0;
+    Learner full(f.p.problem, settings);
+    full.Initialize(f.nominal);
+    f.plant.Run(f.lq.x0, full.NextTrial(), &measured);
+    const TrialResult step = full.CompleteTrial(measured);
+    EXPECT_LT(step.predicted, -0.01 * full.nominal_cost() - 1e-12);
+    EXPECT_TRUE(step.accepted);
+  }
+  LearnerSettings bad = FineLq::Settings(false);
+  bad.min_predicted_decrease = -0.1;
+  ExpectThrowsWith([&] { Learner l(f.p.problem, bad); }, "min_predicted_decrease");
+  bad.min_predicted_decrease = std::nan("");
+  ExpectThrowsWith([&] { Learner l(f.p.problem, bad); }, "min_predicted_decrease");
+  bad = FineLq::Settings(false);
+  bad.blend_feedback = false;
+  bad.blend_feedforward = true;
+  ExpectThrowsWith([&] { Learner l(f.p.problem, bad); }, "blend_feedforward needs blend_feedback");
+}
+
 // noise_margin: sigma from the re-measurement (the lucky and the fair cost of the nominal law
 // differ by d0: sigma = |d0| / sqrt(2)). The first trial after the re-measurement that passes
 // (36) without a margin, decrease d < 0, passes it with a margin of half |d| (a margin only

@@ -353,6 +353,60 @@ TEST(OnlineController, BlendStateFeedbackMixesInTheOtherLawsFeedback) {
   ExpectStepsMatchQp(s, ctrl, 9, expected_b(0.0));
 }
 
+// BlendStateFeedback with the feed-forward: at w = 0 a law with no step of its own commands
+// what the other law commands, from states off the nominal, its clamping at tight bounds included
+// (the same pass, so the same H); without the feed-forward it tracks the nominal's measured input,
+// which is not the other law's command (the other law has a step of its own, alpha 0.4). With
+// another pass (mu = 2) and bounds that never act, the unconstrained commands agree.
+TEST(OnlineController, BlendedFeedforwardMakesTheTrialTheOtherLaw) {
+  for (const bool same_pass : {true, false}) {
+    SCOPED_TRACE(same_pass);
+    ControlSetup s(3, 4, 3, same_pass ? 0.35 : 100.0);
+    BackwardPass other;
+    other.Allocate(s.problem, s.nominal.total_samples(), s.pass.settings());
+    other.Run(s.nominal, 2.0);
+    const Vector zero = Vector::Zero(2);
+    OnlineController law, ctrl;
+    law.Allocate(s.problem, s.nominal.total_samples());
+    ctrl.Allocate(s.problem, s.nominal.total_samples());
+    law.Load(s.nominal, same_pass ? s.pass : other, 0.4, zero);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> nd;
+    int clamped = 0;
+    double tracked_gap = 0.0;
+    for (int k = 0; k < 2; ++k) {
+      const int n = s.sys->state_dim(k);
+      for (int j = 0; j < s.pass.num_samples(k); j += 7) {
+        const double t = (s.pass.tau(k, j) - k) * ctrl.PlannedDuration(k);
+        Vector x = s.nominal.modes[k].x.col(j);
+        for (int i = 0; i < n; ++i) x(i) += 0.3 * nd(rng);
+        Vector u_law(3), u(3), u_tracking(3);
+        law.Step(k, t, x, u_law);
+        ctrl.Load(s.nominal, s.pass, 0.0, zero);
+        ctrl.BlendStateFeedback(law, 0.0, true);
+        ctrl.Step(k, t, x, u);
+        EXPECT_LT((u - u_law).cwiseAbs().maxCoeff(), 1e-9) << "k " << k << " j " << j;
+        ctrl.Load(s.nominal, s.pass, 0.0, zero);
+        ctrl.BlendStateFeedback(law, 0.0, false);
+        ctrl.Step(k, t, x, u_tracking);
+        tracked_gap = std::max(tracked_gap, (u_tracking - u_law).cwiseAbs().maxCoeff());
+        clamped += (u_law.cwiseAbs().array() > 0.35 - 1e-12).any();
+      }
+    }
+    EXPECT_GT(tracked_gap, 1e-3);  // the feed-forward is what makes them agree
+    if (same_pass) EXPECT_GT(clamped, 5);  // the bounds act
+  }
+  // At w = 1 the feed-forward changes nothing.
+  ControlSetup s(3);
+  OnlineController law, a, b;
+  for (OnlineController* c : {&law, &a, &b}) c->Allocate(s.problem, s.nominal.total_samples());
+  law.Load(s.nominal, s.pass, 0.4, Vector::Zero(2));
+  a.Load(s.nominal, s.pass, 0.7, Vector::Zero(2));
+  b.Load(s.nominal, s.pass, 0.7, Vector::Zero(2));
+  a.BlendStateFeedback(law, 1.0, true);
+  EXPECT_EQ(a.ExportLaw().c, b.ExportLaw().c);
+}
+
 // BlendStateFeedback keeps H_o^{-1} G_o of the other law for the trials of a nominal: a blend
 // that reuses it equals, bit for bit, the blend of a controller that never blended before, and
 // a change of the other law (a new Load) or of this controller's nominal is seen.

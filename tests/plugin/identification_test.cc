@@ -92,11 +92,18 @@ TEST(ControllerIdentificationTest, TheModelsMassIsReSolvedOnceOnTheRobots) {
 }
 
 // The 10 kg robot matches the 10 kg model within 1 %: no re-solve, and every hop is exactly
-// the hop of the same run without identification.
+// the hop of the same run without identification (whose learner is given the settings that
+// identification's model_law gives it).
 // Fifteen hops of Algorithm 1 on the 10 kg robot with `identifying` and without identification:
 // no re-solve, and every hop the same; the identifying controller is returned for more checks.
 std::unique_ptr<Robot> ExpectRunsExactlyAsWithout(const ControllerConfig& identifying) {
-  Robot plain("hopper.xml", ControllerConfig(), false);
+  ControllerConfig without;
+  if (identifying.identification.model_law) {
+    without.driver.learner.blend_feedforward = true;
+    without.driver.learner.min_predicted_decrease =
+        identifying.identification.min_predicted_decrease;
+  }
+  Robot plain("hopper.xml", without, false);
   auto rig = std::make_unique<Robot>("hopper.xml", identifying, false);
   EXPECT_TRUE(plain.ok() && rig->ok());
   if (!plain.ok() || !rig->ok()) return rig;
@@ -386,6 +393,8 @@ TEST(ControllerIdentificationTest, BadSettingsAreNamed) {
        "config.identification.mass_resolution = 0, expected finite and > 0"},
       {[](IdentificationSettings* s) { s->resolve_latency = std::nan(""); },
        "config.identification.resolve_latency = nan, expected finite and >= 0"},
+      {[](IdentificationSettings* s) { s->min_predicted_decrease = -0.5; },
+       "config.identification.min_predicted_decrease = -0.5, expected finite and >= 0"},
       {[](IdentificationSettings* s) { s->estimator.z = -1.0; }, "MassIdentification: z = -1"},
       {[](IdentificationSettings* s) { s->term_resolution.slope = 0.0; },
        "config.identification.term_resolution.slope = 0, expected finite and > 0"},
@@ -398,6 +407,30 @@ TEST(ControllerIdentificationTest, BadSettingsAreNamed) {
     std::string error;
     EXPECT_EQ(HopperController::Create(m.get(), config, &error), nullptr);
     EXPECT_NE(error.find(c.message), std::string::npos) << error;
+  }
+}
+
+// model_law: with identification acting, the driver's learner tends to the nominal law
+// exactly (blend_feedforward) and has the floor on the predicted decrease; without it, or with
+// model_law off, the learner is the fixed-model one (the paper comparison's).
+TEST(ControllerIdentificationTest, AnIdentifiedModelsLearnerTrustsItsLaw) {
+  MjModelPtr m = LoadMjcf(std::string(DDOC_MODELS_DIR) + "/hopper_m8.xml");
+  struct Case {
+    bool mass, terms, model_law, trusted;
+  };
+  for (const Case& c : {Case{false, false, true, false}, Case{true, false, true, true},
+                        Case{false, true, true, true}, Case{true, true, false, false}}) {
+    ControllerConfig config;
+    config.identification.mass = c.mass;
+    config.identification.terms = c.terms;
+    config.identification.model_law = c.model_law;
+    config.identification.min_predicted_decrease = 0.02;
+    std::string error;
+    auto controller = HopperController::Create(m.get(), config, &error);
+    ASSERT_NE(controller, nullptr) << error;
+    const LearnerSettings& l = controller->driver().settings().learner;
+    EXPECT_EQ(l.blend_feedforward, c.trusted) << c.mass << c.terms << c.model_law;
+    EXPECT_EQ(l.min_predicted_decrease, c.trusted ? 0.02 : 0.0);
   }
 }
 
