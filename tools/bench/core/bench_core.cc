@@ -138,11 +138,12 @@ BENCHMARK(BM_OnlineStep)
     ->Unit(benchmark::kMicrosecond);
 
 // Args: m, n + K, blend (0: Load alone, the bare baseline; 1: Load then BlendStateFeedback with
-// another loaded law, what a trial costs with LearnerSettings::blend_feedback). 600 samples.
+// another loaded law, what a trial costs with LearnerSettings::blend_feedback; 2: the same with
+// the feed-forward, LearnerSettings::blend_feedforward). 600 samples.
 void BM_LoadTrialLaw(benchmark::State& state) {
   const int m = static_cast<int>(state.range(0));
   const int n = static_cast<int>(state.range(1)) - kModes;
-  const bool blend = state.range(2) != 0;
+  const bool blend = state.range(2) != 0, feedforward = state.range(2) == 2;
   Setup s(n, m, 600);
   BackwardPass pass;
   pass.Allocate(s.problem, 600);
@@ -154,13 +155,13 @@ void BM_LoadTrialLaw(benchmark::State& state) {
   nominal_law.Load(s.nominal, pass, 0.0, Vector::Zero(kModes));
   for (auto _ : state) {
     ctrl.Load(s.nominal, pass, 0.25, dT);
-    if (blend) ctrl.BlendStateFeedback(nominal_law, 0.5);
+    if (blend) ctrl.BlendStateFeedback(nominal_law, 0.5, feedforward);
     benchmark::DoNotOptimize(&ctrl);
   }
 }
 BENCHMARK(BM_LoadTrialLaw)
     ->ArgNames({"m", "nK", "blend"})
-    ->ArgsProduct({{4, 8}, {16, 32}, {0, 1}})
+    ->ArgsProduct({{4, 8}, {16, 32}, {0, 1, 2}})
     ->Unit(benchmark::kMicrosecond);
 
 // Args: n + K, samples, integrator (0 RK4, 1 midpoint), preset (0 the paper's backward pass:
