@@ -85,8 +85,8 @@ struct IdentificationSettings {
   /// min_predicted_decrease |I^i|. Default true (docs/experiments.md, "The law at alpha -> 0 on an
   /// identified model").
   bool model_law = true;
-  /// With model_law: LearnerSettings::min_predicted_decrease of the learner, >= 0; default 0.01.
-  double min_predicted_decrease = 0.01;
+  /// With model_law: LearnerSettings::min_predicted_decrease of the learner, >= 0; default 0.03.
+  double min_predicted_decrease = 0.03;
 
   static MassIdentification::Settings DefaultEstimator() {
     MassIdentification::Settings s;

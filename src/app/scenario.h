@@ -119,7 +119,7 @@ struct Scenario {
   std::optional<bool> substep_events;
   // <identification mass="on|off" terms="on|off" settle_hops="N" settle_cost="F"
   // settle_hops_max="N" resolve_latency="S" model_law="on|off" min_predicted_decrease="F"/>:
-  // IdentificationSettings (unset: off, off, 2, 2, 30, 0.1 s, on, 0.01)
+  // IdentificationSettings (unset: off, off, 2, 2, 30, 0.1 s, on, 0.03)
   std::optional<bool> identify_mass;
   std::optional<bool> identify_terms;
   std::optional<int> settle_hops;

@@ -299,7 +299,7 @@ TEST_F(ScenarioTest, Identification) {
   EXPECT_EQ(c.identification.settle_hops_max, 30);
   EXPECT_EQ(c.identification.resolve_latency, 0.1);
   EXPECT_TRUE(c.identification.model_law);
-  EXPECT_EQ(c.identification.min_predicted_decrease, 0.01);
+  EXPECT_EQ(c.identification.min_predicted_decrease, 0.03);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "mass='on' model_law='off' min_predicted_decrease='0.05'"))),
       HopperParams());
