@@ -183,8 +183,12 @@ class OnlineController : public Policy {
   // controller's tau_, nominal_T_ and counts as they were (the learner blends every trial of a
   // nominal with the same law).
   Matrix blend_g_;
-  // The same samples' e (m x S): `law`'s unconstrained command at x^i(tau) minus u^i(tau).
+  // With the feed-forward, the same samples' e (m x S): `law`'s unconstrained command at
+  // x^i(tau) minus u^i(tau), computed only when a blend asks for it (blend_has_e_) and kept
+  // under the same key, which does not see a change of x^i or u^i alone (the learner blends
+  // after each Load of one nominal; a new nominal comes with a new law or new durations).
   Matrix blend_e_;
+  bool blend_has_e_ = false;
   Vector blend_dx_;  // n_max: x^i(tau) - `law`'s state there
   std::vector<char> blend_ok_;
   std::uint64_t blend_law_revision_ = 0;

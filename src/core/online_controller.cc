@@ -294,6 +294,7 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w,
   bool reuse = blend_law_revision_ == law.revision_ && law.revision_ != 0 &&
                blend_T_ == nominal_T_ && blend_tau_.head(S) == tau_.head(S);
   for (int k = 0; k < K_ && reuse; ++k) reuse = blend_counts_[k] == layout_.count(k);
+  if (feedforward && !blend_has_e_) reuse = false;
   for (int k = 0; k < K_ && !reuse; ++k) {
     const int n = layout_.dim(k);
     const double nominal_duration = nominal_T_(k) - (k == 0 ? 0.0 : nominal_T_(k - 1));
@@ -314,20 +315,23 @@ void OnlineController::BlendStateFeedback(const OnlineController& law, double w,
       llt_.compute(H_);
       blend_ok_[s] = llt_.info() == Eigen::Success;  // else no feedback to take: keep this law's
       if (!blend_ok_[s]) continue;
-      // e = law's unconstrained command at x^i(tau) minus the nominal's input there.
-      auto dx = blend_dx_.head(n);
-      dx = x_.col(s).head(n) - ((1.0 - a) * law.x_.col(s0).head(n) + a * law.x_.col(s1).head(n));
-      b_ = (1.0 - a) * law.c_.col(s0) + a * law.c_.col(s1);
-      b_.noalias() += g * dx;
-      auto e = blend_e_.col(s);
-      e = (1.0 - a) * law.u_.col(s0) + a * law.u_.col(s1) - u_.col(s);
-      llt_.solveInPlace(b_);
-      e -= b_;
+      if (feedforward) {  // e = law's unconstrained command at x^i(tau) minus u^i(tau)
+        auto dx = blend_dx_.head(n);
+        dx = x_.col(s).head(n) -
+             ((1.0 - a) * law.x_.col(s0).head(n) + a * law.x_.col(s1).head(n));
+        b_ = (1.0 - a) * law.c_.col(s0) + a * law.c_.col(s1);
+        b_.noalias() += g * dx;
+        auto e = blend_e_.col(s);
+        e = (1.0 - a) * law.u_.col(s0) + a * law.u_.col(s1) - u_.col(s);
+        llt_.solveInPlace(b_);
+        e -= b_;
+      }
       llt_.solveInPlace(g);
     }
   }
   if (!reuse) {
     blend_law_revision_ = law.revision_;
+    blend_has_e_ = feedforward;
     blend_T_ = nominal_T_;
     blend_tau_.head(S) = tau_.head(S);
     for (int k = 0; k < K_; ++k) blend_counts_[k] = layout_.count(k);
