@@ -38,6 +38,7 @@ struct Options {
   std::string method = "alg1";
   int hops = 100, warmup = 1, push_hop = -1, newton = 0;
   double model_mass = 10, model_drag = 0, plant_mass = -1, plant_drag = -1;
+  double model_b_hip = 0, plant_b_hip = -1;
   double perturbation = 0.05, push_dv = 0, cyclic = 0;
   bool event = false, floquet = false;
   std::string reference = "own";
@@ -58,6 +59,11 @@ int ParseOptions(int argc, char** argv, Options* o) {
   cli.add_option("--plant-M", o->plant_mass, "plant mass, kg (default: the model's)")
       ->check(CLI::PositiveNumber);
   cli.add_option("--plant-cd", o->plant_drag, "plant drag c_d, kg/m (default: the model's)")
+      ->check(CLI::NonNegativeNumber);
+  cli.add_option("--model-b-hip", o->model_b_hip, "model hip damper b_hip, N m s/rad")
+      ->check(CLI::NonNegativeNumber);
+  cli.add_option("--plant-b-hip", o->plant_b_hip,
+                 "plant hip damper b_hip, N m s/rad (default: the model's)")
       ->check(CLI::NonNegativeNumber);
   cli.add_option("--pert", o->perturbation,
                  "initial perturbation p: xd += p, phi += p/5, phid += p");
@@ -82,6 +88,7 @@ int ParseOptions(int argc, char** argv, Options* o) {
   }
   if (o->plant_mass < 0) o->plant_mass = o->model_mass;
   if (o->plant_drag < 0) o->plant_drag = o->model_drag;
+  if (o->plant_b_hip < 0) o->plant_b_hip = o->model_b_hip;
   return -1;
 }
 
@@ -93,10 +100,11 @@ class Experiment {
   void Floquet();   // --floquet
 
  private:
-  static HopperParams Params(double mass, double drag) {
+  static HopperParams Params(double mass, double drag, double b_hip) {
     HopperParams p;
     p.M = mass;
     p.c_d = drag;
+    p.b_hip = b_hip;
     return p;
   }
   // The takeoff state of the next hop from a measured hop (foot at x = 0).
@@ -120,8 +128,8 @@ class Experiment {
 
 Experiment::Experiment(const Options& o)
     : o_(o),
-      model_(Params(o.model_mass, o.model_drag)),
-      truth_(Params(o.plant_mass, o.plant_drag)),
+      model_(Params(o.model_mass, o.model_drag, o.model_b_hip)),
+      truth_(Params(o.plant_mass, o.plant_drag, o.plant_b_hip)),
       cost_(model_),
       problem_(HopperProblem(model_, cost_)),
       model_plant_(problem_),
@@ -140,9 +148,9 @@ Experiment::Experiment(const Options& o)
   ls.backward.terminal_event = o.event;
   Learner model_learner(problem_, ls);
   const SolveResult r = SolveFromGait(model_learner, model_plant_, &cost_, gait_);
-  std::fprintf(stderr, "# gait apex %.3f stance %.3f; OC-FB on the model: %d iterations, cost "
-               "%.4f -> %.4f\n", gait_.apex, gait_.stance_time, r.iterations,
-               r.cost_history.front(), r.cost);
+  std::fprintf(stderr, "# gait apex %.3f stance %.3f; OC-FB on the model: %d iterations, %d trials, "
+               "cost %.4f -> %.4f, status %s\n", gait_.apex, gait_.stance_time, r.iterations,
+               r.trials, r.cost_history.front(), r.cost, LearnerStatusName(r.status));
   u0_ = model_learner.ConvergedPolicy(0.0);
 }
 
