@@ -272,11 +272,14 @@ def run_hopper(scenario: str, method: str = "", hops: Optional[int] = None,
                fps: float = 60.0, law_cache: str = "",
                substep_events: bool = False,
                identify: Optional[bool] = None,
-               identify_terms: Optional[bool] = None) -> Dict[str, Any]:
+               identify_terms: Optional[bool] = None,
+               identify_terms_acted: str = "") -> Dict[str, Any]:
     """Runs a ddoc-hopper scenario (built with the MuJoCo application only) with the command
     line's overrides (method, hops, seconds, robot, model_mjcf, pushes as (time, force, duration),
     (hop, phase, force, duration) or the --push strings, no_pushes, preset "default" | "paper",
-    offline_latency, log_every, law_cache, substep_events, identify, identify_terms); progress(row) after every hop; PNG frames into
+    offline_latency, log_every, law_cache, substep_events, identify, identify_terms,
+    identify_terms_acted "all" | "none" | "b_leg,b_hip,j_body,c_d,slope"); progress(row) after
+    every hop; PNG frames into
     render_dir when HAVE_RENDER. Returns the columns of hops.csv as NumPy arrays, 'trajectory'
     (the columns of trajectory.csv), method, fell, fall_reason, sim_time, frames, initial_law,
     resolves.

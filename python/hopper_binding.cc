@@ -238,11 +238,19 @@ py::dict RunHopper(const std::string& scenario, const std::string& method,
                    const py::object& offline_latency, int log_every,
                    const py::object& progress, const std::string& render_dir, int width,
                    int height, double fps, const std::string& law_cache, bool substep_events,
-                   std::optional<bool> identify, std::optional<bool> identify_terms) {
+                   std::optional<bool> identify, std::optional<bool> identify_terms,
+                   const std::string& identify_terms_acted) {
   app::RunOverrides overrides;
   overrides.substep_events = substep_events;
   overrides.identify = identify;
   overrides.identify_terms = identify_terms;
+  if (!identify_terms_acted.empty()) {
+    try {
+      overrides.identify_terms_acted = ParseActedTerms(identify_terms_acted);
+    } catch (const InvalidArgument& error) {
+      throw py::value_error(std::string("identify_terms_acted: ") + error.what());
+    }
+  }
   overrides.method = method;
   overrides.hops = hops;
   overrides.seconds = seconds;
@@ -444,7 +452,7 @@ class RunFailed(RuntimeError):
           py::arg("progress") = py::none(), py::arg("render_dir") = "", py::arg("width") = 640,
           py::arg("height") = 480, py::arg("fps") = 60.0, py::arg("law_cache") = "",
           py::arg("substep_events") = false, py::arg("identify") = py::none(),
-          py::arg("identify_terms") = py::none(),
+          py::arg("identify_terms") = py::none(), py::arg("identify_terms_acted") = "",
           R"(Runs a ddoc-hopper scenario file on the MuJoCo robot, as the command line does.
 
 The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value:
@@ -470,6 +478,9 @@ The arguments are ddoc-hopper's overrides; empty/None keeps the scenario's value
   identify         True/False: identify the mass and re-solve u^0 on it (--identify/--no-identify)
   identify_terms   True/False: identify b_leg, b_hip, J_body (J_leg with it), c_d and the floor
                    slope and re-solve u^0 on them (--identify-terms/--no-identify-terms)
+  identify_terms_acted  the terms that re-solve u^0: "all", "none" or a comma-separated list
+                   of b_leg, b_hip, j_body, c_d, slope (--identify-terms-acted; "": the
+                   scenario's)
 
 Returns a dict: the columns of hops.csv as NumPy arrays (hop, t_start, t_end, cost, I1..I4, T1,
 T2, step_length, speed, apex, alpha, accepted, du2, dT2, start_shift, restarted, remeasured,

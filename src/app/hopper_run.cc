@@ -146,6 +146,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (s.substep_events) config.contact.substep_events = *s.substep_events;
   if (s.identify_mass) config.identification.mass = *s.identify_mass;
   if (s.identify_terms) config.identification.terms = *s.identify_terms;
+  if (s.identify_terms_acted) config.identification.terms_estimator.acted = *s.identify_terms_acted;
   if (s.settle_hops) config.identification.settle_hops = *s.settle_hops;
   if (s.settle_cost) config.identification.settle_cost = *s.settle_cost;
   if (s.settle_hops_max) config.identification.settle_hops_max = *s.settle_hops_max;
@@ -172,6 +173,19 @@ void RunOverrides::Register(CLI::App* cli, bool full) {
       "identify the leg and hip damping and the floor slope from the hops and re-solve u^0 on "
       "them when the model's leave the estimates' confidence regions (<identification terms>; "
       "overrides the scenario)");
+  cli->add_option_function<std::string>(
+         "--identify-terms-acted",
+         [this](const std::string& text) {
+           try {
+             identify_terms_acted = ParseActedTerms(text);
+           } catch (const InvalidArgument& error) {
+             throw CLI::ValidationError("--identify-terms-acted", error.what());
+           }
+         },
+         "the identified terms that re-solve u^0 (with --identify-terms): all (default), none or "
+         "a comma-separated list of b_leg, b_hip, j_body, c_d, slope; the others are estimated "
+         "and reported only (<identification terms_acted>; overrides the scenario)")
+      ->type_name("LIST");
   cli->add_flag("--no-pushes", no_pushes, "ignore the scenario's pushes");
   cli->add_flag("--substep-events", substep_events,
                 "locate touchdown and takeoff inside the physics step for the measured durations "
@@ -287,6 +301,7 @@ Scenario ScenarioWithOverrides(const std::string& path, const RunOverrides& o) {
   if (o.substep_events) s.substep_events = true;
   if (o.identify) s.identify_mass = *o.identify;
   if (o.identify_terms) s.identify_terms = *o.identify_terms;
+  if (o.identify_terms_acted) s.identify_terms_acted = *o.identify_terms_acted;
   if (o.no_pushes) {
     s.pushes.clear();
     s.hop_pushes.clear();

@@ -91,6 +91,8 @@ struct RunOverrides {
   std::optional<bool> identify;
   /// --identify-terms / --no-identify-terms: IdentificationSettings::terms (overrides the scenario)
   std::optional<bool> identify_terms;
+  /// --identify-terms-acted LIST: TermsIdentification::Settings::acted (overrides the scenario)
+  std::optional<TermsIdentification::Settings::Acted> identify_terms_acted;
   /// --law-cache DIR: stored u^0 laws (ControllerConfig::law_cache); unset: $DDOC_LAW_CACHE (set
   /// and empty: off), then, when `user_law_cache`, DefaultLawCacheDir(), else off.
   std::string law_cache;

@@ -205,6 +205,8 @@ HopperRun::HopperRun(const Options& o, LoadedRun* run, RunLog* log, Frames* fram
   summary_.initial_law = run->controller->law_cache_status();
   summary_.identify_mass = run->config.identification.mass;
   summary_.identify_terms = run->config.identification.terms;
+  summary_.identify_terms_acted =
+      ActedTermsName(run->config.identification.terms_estimator.acted);
   // A law cache that could not be written, or held a file it could not use, is worth a line.
   if (run->controller->law_cache_trouble()) {
     std::fprintf(stderr, "ddoc-hopper: warning: law cache: %s (the run goes on)\n",

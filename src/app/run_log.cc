@@ -214,6 +214,7 @@ void RunLog::WriteSummary(const Summary& s) {
                          {"identified_mass", s.identified_mass},
                          {"model_mass", s.model_mass},
                          {"terms", s.identify_terms},
+                         {"terms_acted", s.identify_terms_acted},
                          {"resolves", nlohmann::json::array()}};
   const TermsIdentification::Estimate& e = s.identified_terms;
   const HopperParams& p = s.model_params;

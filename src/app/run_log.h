@@ -72,6 +72,7 @@ struct Summary {
   // IdentificationSettings::terms, the last hop's estimates of the terms with their standard
   // errors, and the model's terms (HopReport::identified_terms, model_params).
   bool identify_terms = false;
+  std::string identify_terms_acted = "all";  ///< ActedTermsName of the terms acted on
   TermsIdentification::Estimate identified_terms;
   HopperParams model_params;
   std::vector<plugin::ModelResolve> resolves;

@@ -116,7 +116,7 @@ const std::vector<ElementSpec>& Elements() {
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
       {"contact", false, {Text("substep_events")}},
       {"identification", false,
-       {Text("mass"), Text("terms"), Integer("settle_hops", 0),
+       {Text("mass"), Text("terms"), Text("terms_acted"), Integer("settle_hops", 0),
         Number("settle_cost", kNonNegative), Integer("settle_hops_max", 0),
         Number("resolve_latency", kNonNegative), Text("model_law"),
         Number("min_predicted_decrease", kNonNegative)}},
@@ -380,6 +380,13 @@ void ParseElement(const std::string& path, const Element* e, Scenario* s) {
   } else if (tag == "identification") {
     if (auto v = GetChoice(path, e, "mass", "off", "on")) s->identify_mass = *v == "on";
     if (auto v = GetChoice(path, e, "terms", "off", "on")) s->identify_terms = *v == "on";
+    if (const char* list = e->Attribute("terms_acted")) {
+      try {
+        s->identify_terms_acted = ParseActedTerms(list);
+      } catch (const InvalidArgument& error) {
+        Fail(path, e->GetLineNum(), Where(e) + " terms_acted: " + error.what());
+      }
+    }
     s->settle_hops = GetInteger(path, e, "settle_hops");
     s->settle_cost = GetNumber(path, e, "settle_cost");
     s->settle_hops_max = GetInteger(path, e, "settle_hops_max");

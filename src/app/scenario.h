@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ddoc/hopper/identification.h"
 #include "ddoc/hopper/push.h"
 #include "ddoc/trial_driver.h"
 
@@ -117,11 +118,13 @@ struct Scenario {
   ExperimentOverrides experiment;    // <experiment .../>
   // <contact substep_events="on|off"/>: ContactPhaseSettings::substep_events (unset: off)
   std::optional<bool> substep_events;
-  // <identification mass="on|off" terms="on|off" settle_hops="N" settle_cost="F"
-  // settle_hops_max="N" resolve_latency="S" model_law="on|off" min_predicted_decrease="F"/>:
-  // IdentificationSettings (unset: off, off, 2, 2, 30, 0.1 s, on, 0.03)
+  // <identification mass="on|off" terms="on|off" terms_acted="LIST" settle_hops="N"
+  // settle_cost="F" settle_hops_max="N" resolve_latency="S" model_law="on|off"
+  // min_predicted_decrease="F"/>: IdentificationSettings (unset: off, off, all, 2, 2, 30, 0.1 s,
+  // on, 0.03); terms_acted as ParseActedTerms reads it
   std::optional<bool> identify_mass;
   std::optional<bool> identify_terms;
+  std::optional<TermsIdentification::Settings::Acted> identify_terms_acted;
   std::optional<int> settle_hops;
   std::optional<double> settle_cost;
   std::optional<int> settle_hops_max;

@@ -2,8 +2,10 @@
 #include "ddoc/hopper/identification.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "ddoc/types.h"
 
@@ -301,39 +303,96 @@ bool TermsIdentification::Determined() const {
 bool TermsIdentification::LeavesModel(const HopperParams& model) const {
   const Estimate e = estimate();
   const double z = settings_.z, rel = settings_.inertia_tolerance;
-  return Leaves(e.b_leg, model.b_leg, z, settings_.b_leg_tolerance) ||
-         Leaves(e.b_hip, model.b_hip, z, settings_.b_hip_tolerance) ||
-         Leaves(e.j_body, model.J_body, z, rel * model.J_body) ||
-         Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance) ||
-         Leaves(e.slope, model.slope, z, settings_.slope_tolerance);
+  const Settings::Acted& a = settings_.acted;
+  return (a.b_leg && Leaves(e.b_leg, model.b_leg, z, settings_.b_leg_tolerance)) ||
+         (a.b_hip && Leaves(e.b_hip, model.b_hip, z, settings_.b_hip_tolerance)) ||
+         (a.j_body && Leaves(e.j_body, model.J_body, z, rel * model.J_body)) ||
+         (a.c_d && Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance)) ||
+         (a.slope && Leaves(e.slope, model.slope, z, settings_.slope_tolerance));
 }
 
 HopperParams TermsIdentification::Identified(const HopperParams& model,
                                              const Resolution& resolution) const {
   const Estimate e = estimate();
   const double z = settings_.z;
+  const Settings::Acted& a = settings_.acted;
   HopperParams p = model;
-  if (Leaves(e.b_leg, model.b_leg, z, settings_.b_leg_tolerance)) {
+  if (a.b_leg && Leaves(e.b_leg, model.b_leg, z, settings_.b_leg_tolerance)) {
     p.b_leg = std::max(0.0, Rounded(e.b_leg.value, resolution.b_leg));
   }
-  if (Leaves(e.b_hip, model.b_hip, z, settings_.b_hip_tolerance)) {
+  if (a.b_hip && Leaves(e.b_hip, model.b_hip, z, settings_.b_hip_tolerance)) {
     p.b_hip = std::max(0.0, Rounded(e.b_hip.value, resolution.b_hip));
   }
-  if (Leaves(e.j_body, model.J_body, z, settings_.inertia_tolerance * model.J_body)) {
+  if (a.j_body && Leaves(e.j_body, model.J_body, z, settings_.inertia_tolerance * model.J_body)) {
     // A weaker hip motor reads as J_body / g: J_leg / g with it (the leg's own flight balance
     // reads J_leg 1 % low on the robot, too coarse for a decision at 1 %).
     const double ratio = std::max(0.01, Rounded(e.j_body.value / model.J_body, resolution.inertia));
     p.J_body = ratio * model.J_body;
     p.J_leg = ratio * model.J_leg;
   }
-  if (Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance)) {
+  if (a.c_d && Leaves(e.c_d, model.c_d, z, settings_.drag_tolerance)) {
     p.c_d = std::max(0.0, Rounded(e.c_d.value, resolution.c_d));
   }
-  if (Leaves(e.slope, model.slope, z, settings_.slope_tolerance)) {
+  if (a.slope && Leaves(e.slope, model.slope, z, settings_.slope_tolerance)) {
     const double limit = 0.9 * HopperParams::kMaxSlope;  // what the model accepts, with a margin
     p.slope = std::min(limit, std::max(-limit, Rounded(e.slope.value, resolution.slope)));
   }
   return p;
+}
+
+namespace {
+
+// The acted-on flags by name, in ActedTermsName's order.
+std::array<std::pair<const char*, bool TermsIdentification::Settings::Acted::*>, 5> ActedFields() {
+  using A = TermsIdentification::Settings::Acted;
+  return {{{"b_leg", &A::b_leg}, {"b_hip", &A::b_hip}, {"j_body", &A::j_body}, {"c_d", &A::c_d},
+           {"slope", &A::slope}}};
+}
+
+}  // namespace
+
+TermsIdentification::Settings::Acted ParseActedTerms(const std::string& list) {
+  using A = TermsIdentification::Settings::Acted;
+  if (list == "all") return A();
+  A a;
+  for (const auto& [name, field] : ActedFields()) a.*field = false;
+  if (list == "none") return a;
+  std::array<bool, 5> seen{};
+  size_t begin = 0;
+  while (true) {
+    const size_t end = std::min(list.find(',', begin), list.size());
+    const std::string name = list.substr(begin, end - begin);
+    bool known = false;
+    const auto fields = ActedFields();
+    for (size_t i = 0; i < fields.size(); ++i) {
+      if (name != fields[i].first) continue;
+      if (seen[i]) {
+        throw InvalidArgument("terms acted on: \"" + name + "\" is named twice in \"" + list +
+                              "\"");
+      }
+      seen[i] = known = true;
+      a.*fields[i].second = true;
+    }
+    if (!known) {
+      throw InvalidArgument("terms acted on: unknown term \"" + name + "\" in \"" + list +
+                            "\", expected all, none or a comma-separated list of b_leg, b_hip, "
+                            "j_body, c_d, slope");
+    }
+    if (end == list.size()) break;
+    begin = end + 1;
+  }
+  return a;
+}
+
+std::string ActedTermsName(const TermsIdentification::Settings::Acted& acted) {
+  std::string names;
+  int count = 0;
+  for (const auto& [name, field] : ActedFields()) {
+    if (!(acted.*field)) continue;
+    names += (count++ ? "," : "") + std::string(name);
+  }
+  if (count == 0) return "none";
+  return count == 5 ? "all" : names;
 }
 
 std::optional<HopperParams> IdentifiedModel(const HopperParams& model,

@@ -314,6 +314,38 @@ TEST_F(CliTest, IdentifyTermsReSolvesOnTheRobotsTerms) {
       << "the same columns";
 }
 
+// --identify-terms-acted: a term left out is estimated and reported but not acted on (the hip
+// damper of --robot-variant b_hip=0.3 on the 8 kg robot; its drag re-solves either way); with
+// all terms acted on u^0 is re-solved on b_hip too; a bad list is a usage error naming the term.
+TEST_F(CliTest, IdentifyTermsActedLeavesOutWhatItDoesNotName) {
+  const std::string run = Scenario("default.xml") +
+                          " --hops 3 -q --method ocfb --robot-variant b_hip=0.3 --identify-terms";
+  const Result all = RunCli(run + " --out " + Out("all"));
+  ASSERT_EQ(all.code, 0) << all.output;
+  const nlohmann::json a =
+      nlohmann::json::parse(ReadFile(dir_ / "all" / "summary.json"))["identification"];
+  EXPECT_EQ(a["terms_acted"].get<std::string>(), "all");
+  ASSERT_GE(a["resolves"].size(), 1u) << a.dump();
+  EXPECT_NEAR(a["resolves"][0]["b_hip"].get<double>(), 0.3, 0.02);
+  const Result some = RunCli(run + " --out " + Out("some") +
+                             " --identify-terms-acted b_leg,j_body,c_d,slope");
+  ASSERT_EQ(some.code, 0) << some.output;
+  const nlohmann::json s =
+      nlohmann::json::parse(ReadFile(dir_ / "some" / "summary.json"))["identification"];
+  EXPECT_EQ(s["terms_acted"].get<std::string>(), "b_leg,j_body,c_d,slope");
+  // The drag (the robot's 0.01 kg/m, the model's 0) still re-solves, without the hip damper.
+  ASSERT_EQ(s["resolves"].size(), 1u) << s.dump();
+  EXPECT_EQ(s["resolves"][0]["b_hip"].get<double>(), 0.0);
+  EXPECT_NEAR(s["resolves"][0]["c_d"].get<double>(), 0.01, 0.002);
+  EXPECT_NEAR(a["resolves"][0]["c_d"].get<double>(), 0.01, 0.002);
+  EXPECT_NEAR(s["identified_b_hip"]["value"].get<double>(), 0.3, 0.02) << "still estimated";
+  EXPECT_EQ(s["model_b_hip"].get<double>(), 0.0);
+  const Result bad = RunCli(run + " --out " + Out("bad") + " --identify-terms-acted b_leg,mass");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--identify-terms-acted"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("unknown term \"mass\""), std::string::npos) << bad.output;
+}
+
 TEST_F(CliTest, MotorStrengthVariantsScaleWhatTheMotorsDeliver) {
   const std::string run = Scenario("default.xml") + " --hops 2 -q --method ocfb";
   const Result plain = RunCli(run + " --out " + Out("plain"));

@@ -325,10 +325,16 @@ TEST_F(ScenarioTest, Identification) {
   EXPECT_TRUE(c.identification.terms);
   EXPECT_FALSE(c.identification.mass);
   ExpectError(Fill(fmt, "terms='1'"), {"<identification>", "terms=\"1\"", "off or on"});
+  EXPECT_EQ(c.identification.terms_estimator.acted, TermsIdentification::Settings::Acted());
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "terms='on' terms_acted='b_leg,slope'"))),
+                          HopperParams());
+  EXPECT_EQ(c.identification.terms_estimator.acted, ParseActedTerms("b_leg,slope"));
+  ExpectError(Fill(fmt, "terms_acted='b_leg,b_hips'"),
+              {"<identification>", "terms_acted", "unknown term \"b_hips\""});
   ExpectError(Fill(fmt, "settle_hops='-1'"), {"<identification>", "settle_hops = -1", ">= 0"});
   ExpectError(Fill(fmt, "drag='on'"),
               {"<identification>", "unknown attribute drag",
-               "expected mass, terms, settle_hops, settle_cost, settle_hops_max, "
+               "expected mass, terms, terms_acted, settle_hops, settle_cost, settle_hops_max, "
                "resolve_latency, model_law, min_predicted_decrease"});
 }
 

@@ -342,6 +342,74 @@ void ExpectNamed(F make, const std::string& text) {
   }
 }
 
+// A term that is not acted on is estimated and reported as before, but neither leaves the
+// model nor moves it: on a robot with every term off the model, acting on all but b_hip moves
+// the four others to the same values as acting on all, and keeps the model's b_hip; acting on
+// none leaves nothing; a robot that differs only in b_hip leaves no model that ignores it.
+TEST(IdentificationTest, ATermNotActedOnIsEstimatedButKeepsTheModelsValue) {
+  std::mt19937 rng(5);
+  const HopIdentificationData hop =
+      SyntheticHop(8.0, 2.0, 3.125, 0.5, -0.02, 0.0, &rng, 1.0, 0.0125);
+  const HopperParams model;
+  const TermsIdentification::Resolution res;
+  TermsIdentification all;
+  all.Add(hop, 8.0);
+  TermsIdentification::Settings settings;
+  settings.acted = ParseActedTerms("b_leg,j_body,c_d,slope");
+  TermsIdentification no_hip(settings);
+  no_hip.Add(hop, 8.0);
+  EXPECT_NEAR(no_hip.estimate().b_hip.value, 0.5, 0.02) << "still estimated";
+  EXPECT_EQ(no_hip.estimate().b_hip.value, all.estimate().b_hip.value);
+  const HopperParams p = all.Identified(model, res), q = no_hip.Identified(model, res);
+  EXPECT_NEAR(p.b_hip, 0.5, 0.02);
+  EXPECT_EQ(q.b_hip, model.b_hip);
+  EXPECT_EQ(q.b_leg, p.b_leg);
+  EXPECT_EQ(q.J_body, p.J_body);
+  EXPECT_EQ(q.J_leg, p.J_leg);
+  EXPECT_EQ(q.c_d, p.c_d);
+  EXPECT_EQ(q.slope, p.slope);
+  EXPECT_TRUE(no_hip.LeavesModel(model));
+  EXPECT_FALSE(no_hip.LeavesModel(q)) << "b_hip 0.5 on the robot, 0 in the model: not acted on";
+  EXPECT_TRUE(all.LeavesModel(q));
+  settings.acted = ParseActedTerms("none");
+  TermsIdentification none(settings);
+  none.Add(hop, 8.0);
+  EXPECT_TRUE(none.Determined());
+  EXPECT_FALSE(none.LeavesModel(model));
+  EXPECT_FALSE(IdentifiedModel(model, MassIdentification(), false, 1e-3, none, true, res));
+  // Only the hip damper differs: ignored when b_hip is not acted on.
+  settings.acted = ParseActedTerms("b_leg,j_body,c_d,slope");
+  TermsIdentification hip_only(settings);
+  hip_only.Add(SyntheticHop(10.0, 0.0, 2.5, 0.3, 0.0, 0.0, &rng, 1.0), 10.0);
+  EXPECT_FALSE(hip_only.LeavesModel(model));
+  TermsIdentification hip_all;
+  hip_all.Add(SyntheticHop(10.0, 0.0, 2.5, 0.3, 0.0, 0.0, &rng, 1.0), 10.0);
+  EXPECT_TRUE(hip_all.LeavesModel(model));
+}
+
+// The list of acted-on terms reads back as written, and a bad one is named.
+TEST(IdentificationTest, ActedTermsParseAndNameTheirErrors) {
+  using Acted = TermsIdentification::Settings::Acted;
+  EXPECT_EQ(ParseActedTerms("all"), Acted());
+  EXPECT_EQ(ActedTermsName(Acted()), "all");
+  const Acted none = ParseActedTerms("none");
+  EXPECT_FALSE(none.b_leg || none.b_hip || none.j_body || none.c_d || none.slope);
+  EXPECT_EQ(ActedTermsName(none), "none");
+  const Acted some = ParseActedTerms("slope,b_leg");
+  EXPECT_TRUE(some.b_leg && some.slope);
+  EXPECT_FALSE(some.b_hip || some.j_body || some.c_d);
+  EXPECT_EQ(ActedTermsName(some), "b_leg,slope");
+  EXPECT_EQ(ParseActedTerms("b_leg,b_hip,j_body,c_d,slope"), Acted());
+  for (const std::string list : {"b_leg,j_body,c_d,slope", "b_hip", "c_d,j_body"}) {
+    EXPECT_EQ(ParseActedTerms(ActedTermsName(ParseActedTerms(list))), ParseActedTerms(list));
+  }
+  ExpectNamed([] { ParseActedTerms("b_leg,mass"); }, "unknown term \"mass\"");
+  ExpectNamed([] { ParseActedTerms(""); }, "unknown term \"\"");
+  ExpectNamed([] { ParseActedTerms("b_leg,"); }, "unknown term \"\" in \"b_leg,\"");
+  ExpectNamed([] { ParseActedTerms("b_hip,b_hip"); }, "\"b_hip\" is named twice");
+  ExpectNamed([] { ParseActedTerms("B_LEG"); }, "expected all, none or a comma-separated list");
+}
+
 TEST(IdentificationTest, BadSettingsAreNamed) {
   OriginRegression::Settings bad_gate;
   bad_gate.gate = 0;

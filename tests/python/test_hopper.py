@@ -153,6 +153,13 @@ def test_run_hopper_identify_terms():
     assert r["j_body"] == 2.5
     both = ddoc.run_hopper(SCENARIO, identify=True, identify_terms=True, **kw)
     assert abs(both["resolves"][0]["mass"] - 8.001) < 0.01
+    # identify_terms_acted: the drag left out re-solves nothing; a bad list names the term.
+    no_drag = ddoc.run_hopper(SCENARIO, identify_terms=True, identify_terms_acted="b_leg,slope",
+                              **kw)
+    assert no_drag["resolves"] == []
+    np.testing.assert_array_equal(no_drag["cost"], plain["cost"])
+    with pytest.raises(ValueError, match='identify_terms_acted: .*unknown term "drag"'):
+        ddoc.run_hopper(SCENARIO, identify_terms=True, identify_terms_acted="drag", **kw)
 
 
 def test_run_hopper_log_every():

@@ -201,6 +201,25 @@ class SummaryTest(TempDirTest):
         self.assertIn("| 8 | b_leg | 0.001 | 0.05 | 0 | 0 | 0.0001 | 0.0003 |", text)
         self.assertIn("| 8 | slope_down | 0.001 | 0.02 | 0 | 0 | 0.0001 | 0.0002 |", text)
 
+    def test_terms_acted_reaches_the_runs_with_the_terms(self):
+        # --terms-acted is passed as --identify-terms-acted to the runs that identify the terms,
+        # and to no other; the grid records it.
+        out = os.path.join(self.tmp, "acted")
+        r = run_tool("robustness_map", "--maps", "unmodelled", "--hops", "3", "--robots", "8",
+                     "--kinds", "b_hip", "--b-hips", "0.3", "--methods", "ocfb",
+                     "--identification", "on,terms", "--terms-acted", "b_leg,slope",
+                     "--hopper", FAKE, "--jobs", "2", "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        argv = {}
+        for case in ("unmod_m8_b_hip0.3_id_ocfb", "unmod_m8_b_hip0.3_idt_ocfb"):
+            with open(os.path.join(out, "runs", case, "argv.txt")) as f:
+                argv[case] = f.read().split("\n")
+        terms = argv["unmod_m8_b_hip0.3_idt_ocfb"]
+        self.assertEqual(terms[terms.index("--identify-terms-acted") + 1], "b_leg,slope")
+        self.assertNotIn("--identify-terms-acted", argv["unmod_m8_b_hip0.3_id_ocfb"])
+        with open(os.path.join(out, "manifest.json")) as f:
+            self.assertEqual(json.load(f)["grid"]["terms_acted"], "b_leg,slope")
+
     def test_unmodelled_counts(self):
         # 8 kg robot, kinds b_leg (levels 1, 4) and gain (0.9): alg1 survives all three, ocfb
         # all but b_leg 4, mrl none. Both survive: b_leg 1 (2.0 / 2.5 = 0.8) and gain 0.9

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <limits>
 #include <optional>
+#include <string>
 
 #include <Eigen/Dense>
 
@@ -213,6 +214,15 @@ class TermsIdentification {
     double inertia_tolerance = 0.01;  ///< relative to the model's J_body, >= 0
     double drag_tolerance = 0.005;    ///< kg/m, >= 0 (half the shipped robots' drag)
     double slope_tolerance = 0.001;   ///< rad, >= 0
+    /// The terms acted on (LeavesModel, Identified); the others are estimated and reported only.
+    /// Default all (ParseActedTerms; docs/hopper.md, "Identifying the model terms").
+    struct Acted {
+      bool b_leg = true, b_hip = true, j_body = true, c_d = true, slope = true;
+      bool operator==(const Acted& o) const {
+        return b_leg == o.b_leg && b_hip == o.b_hip && j_body == o.j_body && c_d == o.c_d &&
+               slope == o.slope;
+      }
+    } acted;
 
     static OriginRegression::Settings DefaultLeg();
     static BlockRegression::Settings DefaultHip();
@@ -254,11 +264,12 @@ class TermsIdentification {
   Estimate estimate() const;
   /// True when every term is determined.
   bool Determined() const;
-  /// True when a determined term of `model` lies outside its estimate's confidence region.
+  /// True when a determined term of `model` that is acted on (Settings::acted) lies outside its
+  /// estimate's confidence region.
   bool LeavesModel(const HopperParams& model) const;
-  /// `model` with each term that leaves it set to its estimate rounded to `resolution` (J_leg
-  /// scaled as J_body), the dampers and the drag clamped at >= 0, the inertias at >= 1 % of the
-  /// model's and the slope inside the model's range; the other terms as in `model`.
+  /// `model` with each acted-on term that leaves it set to its estimate rounded to `resolution`
+  /// (J_leg scaled as J_body), the dampers and the drag clamped at >= 0, the inertias at >= 1 %
+  /// of the model's and the slope inside the model's range; the other terms as in `model`.
   HopperParams Identified(const HopperParams& model, const Resolution& resolution) const;
 
  private:
@@ -266,6 +277,12 @@ class TermsIdentification {
   OriginRegression leg_, drag_, slope_;
   BlockRegression hip_;
 };
+
+/// The terms named in `list`: comma-separated names of b_leg, b_hip, j_body, c_d, slope, or
+/// "all" or "none"; throws InvalidArgument naming an unknown or repeated name.
+TermsIdentification::Settings::Acted ParseActedTerms(const std::string& list);
+/// The acted-on terms as ParseActedTerms reads them ("all", "none" or the names in order).
+std::string ActedTermsName(const TermsIdentification::Settings::Acted& acted);
 
 /// The model u^0 should be solved again on, or nullopt when `model` is still inside the
 /// confidence regions of what is acted on: with act_on_mass, M = the mass estimate rounded to
