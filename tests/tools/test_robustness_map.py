@@ -289,6 +289,83 @@ class SummaryTest(TempDirTest):
             ["--maps", "mass", "--masses", "7,8,9,10", "--drags", "0", "--speeds", "0.5"]))
 
 
+class ReplicateTest(TempDirTest):
+    """--offline-latency reaches every run and the grid; spread counts replicates by hand."""
+
+    def test_offline_latency_reaches_every_run_and_the_grid(self):
+        out = os.path.join(self.tmp, "lat")
+        r = run_tool("robustness_map", "--maps", "mass", "--masses", "8", "--drags", "0",
+                     "--speeds", "0.5", "--methods", "alg1,ocfb", "--hops", "3",
+                     "--offline-latency", "0.023", "--hopper", FAKE, "--jobs", "2", "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for case in ("mass_m8_cd0_v0.5_alg1", "mass_m8_cd0_v0.5_ocfb"):
+            with open(os.path.join(out, "runs", case, "argv.txt")) as f:
+                argv = f.read().split("\n")
+            self.assertEqual(argv[argv.index("--offline-latency") + 1], "0.023")
+        with open(os.path.join(out, "manifest.json")) as f:
+            self.assertEqual(json.load(f)["grid"]["offline_latency"], "0.023")
+        # Without the flag the grid (and so every earlier manifest) has no such key.
+        plain = rm.grid_from_args(rm.run_parser().parse_args(["--maps", "mass"]))
+        self.assertNotIn("offline_latency", plain)
+
+    def replicate(self, name, latency, survived):
+        """A whole two-condition mass map at `latency` (None: ddoc-hopper's default), methods
+        alg1 and ocfb; `survived[(mass, method)]` is the last-10 cost, or None for a fall."""
+        args = ["--maps", "mass", "--masses", "8,12", "--drags", "0", "--speeds", "0.5",
+                "--methods", "alg1,ocfb"]
+        if latency:
+            args += ["--offline-latency", latency]
+        grid = rm.grid_from_args(rm.run_parser().parse_args(args))
+        rows = {}
+        for _, case, keys in rm.cases(grid):
+            m = int(keys["mass"])
+            rows[case] = fake_row("mass", case, keys["method"], survived[(m, keys["method"])],
+                                  0.01, 5, mass=str(m), c_d="0", speed="0.5")
+        d = os.path.join(self.tmp, name)
+        rm.write_outputs(d, grid, (0, 1), set(rows), rows)
+        return d
+
+    def test_spread_counts_each_replicate_and_the_runs_that_differ(self):
+        # alg1 survives both robots in the first replicate and only the 8 kg one in the other
+        # two: 2 / 1 / 1, mean 4/3, sd sqrt(((2/3)^2 + 2 (1/3)^2) / 2) = 0.577. OC-FB survives
+        # the 8 kg robot in all three, where alg1 costs 1.0 against 1.25 (ratio 0.8).
+        a = self.replicate("a", None, {(8, "alg1"): 1.0, (12, "alg1"): 1.3,
+                                       (8, "ocfb"): 1.25, (12, "ocfb"): None})
+        b = self.replicate("b", "0.021", {(8, "alg1"): 1.0, (12, "alg1"): None,
+                                          (8, "ocfb"): 1.25, (12, "ocfb"): None})
+        c = self.replicate("c", "0.023", {(8, "alg1"): 1.0, (12, "alg1"): None,
+                                          (8, "ocfb"): 1.25, (12, "ocfb"): None})
+        out = os.path.join(self.tmp, "spread.md")
+        r = run_tool("robustness_map", "spread", a, b, c, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("| off | alg1 | 2 / 1 / 1 of 2 | 1.3 +- 0.6 |", r.stdout)
+        self.assertIn("| off | ocfb | 1 / 1 / 1 of 2 | 1.0 +- 0.0 |", r.stdout)
+        self.assertIn("- off: 1, 1, 0.800 / 1, 1, 0.800 / 1, 1, 0.800", r.stdout)
+        self.assertIn("Runs whose survival differs between replicates: 1 of 4: "
+                      "mass_m12_cd0_v0.5_alg1 (1 of 3)", r.stdout)
+        self.assertIn(f"| {b} | 0.021 |", r.stdout)
+        with open(out) as f:
+            self.assertEqual(f.read(), r.stdout)
+
+    def test_spread_refuses_what_is_not_a_replicate(self):
+        a = self.replicate("a", None, {(8, "alg1"): 1.0, (12, "alg1"): 1.3,
+                                       (8, "ocfb"): 1.25, (12, "ocfb"): None})
+        grid = rm.grid_from_args(rm.run_parser().parse_args(
+            ["--maps", "mass", "--masses", "8,12", "--drags", "0", "--speeds", "0.5",
+             "--methods", "alg1,ocfb", "--learning", 'remeasure="on"']))
+        other = os.path.join(self.tmp, "other")
+        rows = {case: fake_row("mass", case, keys["method"], 1.0, 0.01, 5, mass=keys["mass"])
+                for _, case, keys in rm.cases(grid)}
+        rm.write_outputs(other, grid, (0, 1), set(rows), rows)
+        r = run_tool("robustness_map", "spread", a, other)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("is not a replicate", r.stderr)
+        self.assertIn("differs in learning", r.stderr)
+        r = run_tool("robustness_map", "spread", a)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("at least two", r.stderr)
+
+
 class ShardMergeTest(TempDirTest):
     def run_map(self, out, *extra):
         r = run_tool("robustness_map", *SMALL, "--out", out, *extra)
@@ -469,9 +546,9 @@ class UsageTest(TempDirTest):
         self.assertEqual(r.returncode, 0, r.stderr)
         description = r.stdout.split("\n\n")[1]
         self.assertTrue(description.rstrip().endswith("."), description)
-        for command in ("merge SLICE_DIR", "report DIR", "slurm-task", "exit status"):
+        for command in ("merge SLICE_DIR", "report DIR", "spread DIR", "slurm-task", "exit status"):
             self.assertIn(command, r.stdout)
-        for command in ("merge", "report", "slurm-task"):
+        for command in ("merge", "report", "slurm-task", "spread"):
             r = run_tool("robustness_map", command, "--help")
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn(f"robustness_map {command}", r.stdout)
@@ -498,6 +575,9 @@ class UsageTest(TempDirTest):
             (["--maps", "unmodelled", "--timeconsts", "0.0005", "--hopper", FAKE],
              ["--timeconsts", "0.0005", ">= 0.001 s"]),
             (["--identification", "maybe", "--hopper", FAKE], ["--identification", "'maybe'"]),
+            (["--offline-latency", "soon", "--hopper", FAKE], ["--offline-latency \"soon\"",
+                                                                "modeled, measured"]),
+            (["--offline-latency", "-0.1", "--hopper", FAKE], ["--offline-latency \"-0.1\""]),
         ])
         r = run_tool("robustness_map", "merge", self.tmp, "--out", os.path.join(self.tmp, "m"))
         self.assertEqual(r.returncode, 2)
