@@ -42,6 +42,7 @@ struct Options {
   double perturbation = 0.05, push_dv = 0, cyclic = 0;
   bool event = false, floquet = false;
   std::string reference = "own";
+  double anchor_weight = 1.0, reference_filter = 1.0, overspeed_latch = 0.0;
 };
 
 int ParseOptions(int argc, char** argv, Options* o) {
@@ -74,6 +75,19 @@ int ParseOptions(int argc, char** argv, Options* o) {
   cli.add_flag("--event", o->event, "BackwardPassSettings::terminal_event");
   cli.add_option("--reference", o->reference, "I1 reference of the learner: own | gait")
       ->check(CLI::IsMember({"own", "gait"}));
+  cli.add_option("--anchor-weight", o->anchor_weight,
+                 "with --reference gait: w of the learner's I1 reference w x_gait + (1 - w) x(0) "
+                 "(ControllerConfig::anchor_weight, default 1)")
+      ->check(CLI::Range(0.0, 1.0));
+  cli.add_option("--reference-filter", o->reference_filter,
+                 "with --anchor-weight < 1: the gain b in (0, 1] of the filtered own start "
+                 "(ControllerConfig::reference_filter, default 1)")
+      ->check(CLI::Range(0.0, 1.0));
+  cli.add_option("--overspeed-latch", o->overspeed_latch,
+                 "with --anchor-weight < 1 and --reference-filter < 1: the gait's reference from "
+                 "the first hop that starts faster than the gait by more than this, m/s "
+                 "(ControllerConfig::overspeed_latch, default 0 = never)")
+      ->check(CLI::NonNegativeNumber);
   cli.add_flag("--floquet", o->floquet, "eigenvalues of u^0's return map on the plant");
   cli.add_option("--newton", o->newton, "Newton steps to u^0's fixed point first (--floquet)")
       ->check(CLI::NonNegativeNumber);
@@ -84,6 +98,22 @@ int ParseOptions(int argc, char** argv, Options* o) {
     return cli.exit(e) == 0 ? 0 : 2;
   } catch (const ScenarioError& e) {
     std::fprintf(stderr, "ddoc-hop-experiment: --method: %s\n", e.what());
+    return 2;
+  }
+  if (o->reference != "gait" &&
+      (o->anchor_weight != 1.0 || o->reference_filter != 1.0 || o->overspeed_latch != 0.0)) {
+    std::fprintf(stderr, "ddoc-hop-experiment: --anchor-weight, --reference-filter and "
+                         "--overspeed-latch need --reference gait\n");
+    return 2;
+  }
+  if (o->overspeed_latch > 0.0 && !(o->anchor_weight < 1.0 && o->reference_filter < 1.0)) {
+    std::fprintf(stderr, "ddoc-hop-experiment: --overspeed-latch needs --anchor-weight < 1 and "
+                         "--reference-filter < 1 (a reference that moves)\n");
+    return 2;
+  }
+  if (!(o->reference_filter > 0.0)) {
+    std::fprintf(stderr, "ddoc-hop-experiment: --reference-filter %g: expected in (0, 1]\n",
+                 o->reference_filter);
     return 2;
   }
   if (o->plant_mass < 0) o->plant_mass = o->model_mass;
@@ -160,9 +190,15 @@ void Experiment::RunHops() {
   ds.warmup_trials = o_.warmup;
   ds.learner.backward.cyclic_value = o_.cyclic;
   ds.learner.backward.terminal_event = o_.event;
+  const Vector anchor = o_.reference == "gait" ? Vector(gait_.x0) : Vector();
+  // A reference that moves between hops: the nominal is compared under the present one (as the
+  // plugin's controller does).
+  if (HopperReferenceMoves(anchor, o_.anchor_weight, o_.reference_filter)) {
+    ds.learner.reference_shift = true;
+  }
   TrialDriver driver(problem_, ds, u0_, ds.method == Method::kMrl ? &prediction_ : nullptr,
-                     HopperCostReference(&cost_, o_.reference == "gait" ? Vector(gait_.x0)
-                                                                         : Vector()));
+                     HopperCostReference(&cost_, anchor, o_.anchor_weight, o_.reference_filter,
+                                         o_.overspeed_latch));
   Vector x0 = gait_.x0;
   x0(hopper::kXd) += o_.perturbation;
   x0(hopper::kPhi) += o_.perturbation / 5;
