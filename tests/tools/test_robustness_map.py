@@ -92,6 +92,33 @@ class GridTest(unittest.TestCase):
                   "hip_gain=0.4,leg_gain=0.4", "contact_timeconst=0.0015"):
             self.assertIn(v, variants)
 
+    def test_robots_outside_the_unmodelled_map(self):
+        # Issue 45: the kinds outside the map (one motor, J_body, the VSA bandwidth, the drag) run
+        # only when --kinds names them; the default grid and its manifest stay issue 44's.
+        self.assertEqual(self.grid("--maps", "unmodelled")["unmodelled"]["kinds"],
+                         list(rm.DEFAULT_KINDS))
+        g = self.grid("--maps", "unmodelled", "--kinds", "hip_gain,leg_gain,j_body,beta,drag,"
+                      "slope_down", "--slopes", "0.01", "--unmodelled-speed", "0.7")
+        cases = rm.cases(g)
+        self.assertEqual(len(cases), 2 * (3 + 2 + 2 + 2 + 1 + 1) * 3)  # 44 conditions at 0.7 m/s
+        self.assertEqual(g["unmodelled"]["levels"]["hip_gain"], [0.9, 0.8, 0.6])
+        self.assertNotIn("gain", g["unmodelled"]["levels"])
+        variants = {n: rm.robot_variant(k["kind"], k["level"]) for _, n, k in cases}
+        self.assertEqual(variants["unmod_m12_hip_gain0.6_alg1"], "hip_gain=0.6")
+        self.assertEqual(variants["unmod_m8_leg_gain0.9_ocfb"], "leg_gain=0.9")
+        self.assertEqual(variants["unmod_m8_j_body3.2_mrl"], "j_body=3.2")
+        self.assertEqual(variants["unmod_m12_beta10_alg1"], "beta=10")
+        self.assertEqual(variants["unmod_m8_drag0.03_alg1"], "c_d=0.03")
+        self.assertEqual(variants["unmod_m8_slope_down0.01_alg1"], "slope=0.01")
+        # What the identification should find: the robot's own J_body and c_d; one weak motor has
+        # no reading in the model's terms (no error is reported for those).
+        self.assertEqual(rm.true_terms(8, "j_body", 3.2)["j_body"], 3.2)
+        self.assertEqual(rm.true_terms(8, "drag", 0.03)["c_d"], 0.03)
+        self.assertAlmostEqual(rm.true_terms(8, "beta", 10)["mass"], 8.001)
+        hip = rm.true_terms(12, "hip_gain", 0.8)
+        self.assertTrue(math.isnan(hip["mass"]) and math.isnan(hip["j_body"]))
+        self.assertEqual(hip["b_leg"], 0.0)
+
     def test_identification_is_an_axis_before_the_method(self):
         # Left at its default (off), the cases, their order and the manifest's grid are those of
         # issue 19; `on` adds a case with _id_ before each method's, next to its `off` twin.
@@ -574,6 +601,10 @@ class UsageTest(TempDirTest):
              ["--slopes", "0.3", "in (0, 0.3) rad"]),
             (["--maps", "unmodelled", "--timeconsts", "0.0005", "--hopper", FAKE],
              ["--timeconsts", "0.0005", ">= 0.001 s"]),
+            (["--maps", "unmodelled", "--kinds", "hip_gain", "--hip-gains", "0.8,1.5", "--hopper",
+              FAKE], ["--hip-gains", "1.5", "in (0, 1)"]),
+            (["--maps", "unmodelled", "--kinds", "j_body", "--j-bodies", "0", "--hopper", FAKE],
+             ["--j-bodies", "> 0"]),
             (["--identification", "maybe", "--hopper", FAKE], ["--identification", "'maybe'"]),
             (["--offline-latency", "soon", "--hopper", FAKE], ["--offline-latency \"soon\"",
                                                                 "modeled, measured"]),
