@@ -38,7 +38,7 @@ struct Options {
   std::string method = "alg1";
   int hops = 100, warmup = 1, push_hop = -1, newton = 0;
   double model_mass = 10, model_drag = 0, plant_mass = -1, plant_drag = -1;
-  double model_b_hip = 0, plant_b_hip = -1;
+  double model_b_hip = 0, plant_b_hip = -1, plant_slope = 0;
   double perturbation = 0.05, push_dv = 0, cyclic = 0;
   bool event = false, floquet = false;
   std::string reference = "own";
@@ -66,6 +66,9 @@ int ParseOptions(int argc, char** argv, Options* o) {
   cli.add_option("--plant-b-hip", o->plant_b_hip,
                  "plant hip damper b_hip, N m s/rad (default: the model's)")
       ->check(CLI::NonNegativeNumber);
+  cli.add_option("--plant-slope", o->plant_slope,
+                 "plant floor slope, rad, > 0 rises in +x (HopperParams::slope; down hill < 0); "
+                 "the model's floor stays level (default 0)");
   cli.add_option("--pert", o->perturbation,
                  "initial perturbation p: xd += p, phi += p/5, phid += p");
   cli.add_option("--push-hop", o->push_hop, "add --push-dv to xd at the start of this hop");
@@ -130,11 +133,12 @@ class Experiment {
   void Floquet();   // --floquet
 
  private:
-  static HopperParams Params(double mass, double drag, double b_hip) {
+  static HopperParams Params(double mass, double drag, double b_hip, double slope = 0.0) {
     HopperParams p;
     p.M = mass;
     p.c_d = drag;
     p.b_hip = b_hip;
+    p.slope = slope;
     return p;
   }
   // The takeoff state of the next hop from a measured hop (foot at x = 0).
@@ -159,7 +163,7 @@ class Experiment {
 Experiment::Experiment(const Options& o)
     : o_(o),
       model_(Params(o.model_mass, o.model_drag, o.model_b_hip)),
-      truth_(Params(o.plant_mass, o.plant_drag, o.plant_b_hip)),
+      truth_(Params(o.plant_mass, o.plant_drag, o.plant_b_hip, o.plant_slope)),
       cost_(model_),
       problem_(HopperProblem(model_, cost_)),
       model_plant_(problem_),
