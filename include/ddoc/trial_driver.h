@@ -61,6 +61,18 @@ struct HarmGuardSettings {
   /// cost of the law it replaced or of u^0 (the reported cost contradicts the learner's
   /// acceptance); otherwise it is kept on that one run and learning goes on. Default false.
   bool only_when_worse = false;
+  /// false: an accepted law is kept on its own trial, without re-runs (the watch is then the
+  /// guard; needs verify_trials >= 2 for the watch's challenges, excludes only_when_worse and
+  /// interleave). Default true.
+  bool verify_accepted = true;
+  /// 0 (default): the watch compares the window's mean with `margin` standard errors. >= 1:
+  /// the window's median judged cost above watch_ratio x the mean judged cost of the law to go
+  /// back to makes that law run verify_trials times, and the kept law is abandoned when their
+  /// median is below the window's (a few pushed hops hardly move a median). Needs watch_trials.
+  double watch_ratio = 0.0;
+  /// false: the watch goes back only to the law the kept one replaced, never to u^0 (whose few
+  /// fresh runs look good on a robot where it has no stable hop). Default true.
+  bool watch_initial = true;
 };
 
 /// Settings of TrialDriver.
@@ -241,7 +253,8 @@ class TrialDriver {
   void Challenge(Target against, bool watch);
   void KeepNew();  // the accepted law passed: it becomes the kept law
   // HarmGuardSettings::only_when_worse: keeps the accepted law at once and returns true when
-  // its trial's judged cost is no higher than the replaced law's and u^0's.
+  // its trial's judged cost is no higher than the replaced law's and u^0's; with
+  // verify_accepted = false whenever that cost is finite.
   bool KeepIfReportAgrees(double judged_cost, double learner_cost);
   double JudgedCost(const Trajectory& measured, bool learns);
   double Compared(double judged) const;  // what the comparisons use: judged, or its log
@@ -265,6 +278,8 @@ class TrialDriver {
   Runs initial_runs_, kept_runs_, previous_runs_;
   std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
   int window_count_ = 0;
+  double window_median_ = 0;        // watch_ratio: the window's median at the challenge
+  std::vector<double> challenge_;   // watch_ratio: the challenge's judged costs
   PooledSpread pooled_;        // within-law deviations of every finished law's runs
   OnlineController* pending_law_ = nullptr;  // the learner's next trial, waiting for the guard
   int reverts_ = 0;

@@ -37,6 +37,21 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
                           std::to_string(settings.guard.watch_trials) +
                           ", expected 0 (no watch) or >= 2");
   }
+  const HarmGuardSettings& g = settings.guard;
+  if (!(std::isfinite(g.watch_ratio) && (g.watch_ratio == 0 || g.watch_ratio >= 1))) {
+    throw InvalidArgument("TrialDriverSettings: guard.watch_ratio = " +
+                          std::to_string(g.watch_ratio) + ", expected 0 (the mean form) or >= 1");
+  }
+  if (g.watch_ratio > 0 && (g.watch_trials == 0 || g.verify_trials == 0)) {
+    throw InvalidArgument("TrialDriverSettings: guard.watch_ratio needs guard.watch_trials >= 2 "
+                          "and guard.verify_trials >= 2 (watch_trials = " +
+                          std::to_string(g.watch_trials) + ", verify_trials = " +
+                          std::to_string(g.verify_trials) + ")");
+  }
+  if (!g.verify_accepted && (g.only_when_worse || g.interleave)) {
+    throw InvalidArgument("TrialDriverSettings: guard.verify_accepted = false excludes "
+                          "guard.only_when_worse and guard.interleave (no re-runs to decide on)");
+  }
   if (settings.guard.only_when_worse && settings.guard.verify_trials == 0) {
     throw InvalidArgument("TrialDriverSettings: guard.only_when_worse needs guard.verify_trials "
                           ">= 2 (verify_trials = 0)");
@@ -76,6 +91,8 @@ void TrialDriver::Reset() {
   phase_ = Phase::kNone;
   window_.assign(static_cast<size_t>(settings_.guard.watch_trials), 0.0);
   window_count_ = 0;
+  window_median_ = 0;
+  challenge_.clear();
   new_learner_sum_ = 0;
   initial_ = kept_ = previous_ = LearnerCheckpoint{};
   pooled_ = PooledSpread{};
@@ -164,21 +181,44 @@ void TrialDriver::Challenge(Target against, bool watch) {
   watch_ = watch;
   phase_ = Phase::kChallenge;
   other_runs_ = Runs{};
+  challenge_.clear();
   verify_left_ = settings_.guard.verify_trials;
   RunLaw(against);
 }
 
+namespace {
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+}  // namespace
+
 void TrialDriver::Watch(double judged) {
   // The kept law's trials: a window of their last watch_trials judged costs. Worse than the
   // law it replaced or u^0: that law runs again.
-  window_[static_cast<size_t>(window_count_ % settings_.guard.watch_trials)] = judged;
-  if (++window_count_ < settings_.guard.watch_trials) return;
+  const HarmGuardSettings& g = settings_.guard;
+  window_[static_cast<size_t>(window_count_ % g.watch_trials)] = judged;
+  if (++window_count_ < g.watch_trials) return;
   Runs recent;
   for (double c : window_) recent.Add(c);
-  const bool suspect =
-      (previous_.valid && WorseThan(recent, previous_runs_)) || WorseThan(recent, initial_runs_);
-  if (!suspect) return;
-  const bool to_initial = !previous_.valid || initial_runs_.mean() <= previous_runs_.mean();
+  bool to_initial = false;
+  if (g.watch_ratio > 0) {
+    // The median form: against the better of the replaced law's and (watch_initial) u^0's
+    // records, by a ratio.
+    const bool initial = g.watch_initial && initial_runs_.n > 0;
+    const bool previous = previous_.valid && previous_runs_.n > 0;
+    if (!initial && !previous) return;
+    to_initial = initial && (!previous || initial_runs_.mean() <= previous_runs_.mean());
+    const double best = to_initial ? initial_runs_.mean() : previous_runs_.mean();
+    window_median_ = Median(window_);
+    if (!(window_median_ > g.watch_ratio * best)) return;
+  } else {
+    const bool suspect =
+        (previous_.valid && WorseThan(recent, previous_runs_)) || WorseThan(recent, initial_runs_);
+    if (!suspect) return;
+    to_initial = !previous_.valid || initial_runs_.mean() <= previous_runs_.mean();
+  }
   new_runs_ = recent;
   window_count_ = 0;
   pending_law_ = learned_;
@@ -204,6 +244,7 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
     new_learner_sum_ += out.cost;
   } else {
     other_runs_.Add(judged);
+    challenge_.push_back(judged);
   }
   if (--verify_left_ > 0) return out;
   if (phase_ == Phase::kVerify) {
@@ -229,7 +270,9 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
   }
   // The other law's fresh runs are in: the law on trial is abandoned when it is worse.
   phase_ = Phase::kNone;
-  const bool worse = WorseThan(new_runs_, other_runs_);
+  const bool worse = watch_ && settings_.guard.watch_ratio > 0
+                         ? !challenge_.empty() && window_median_ > Median(challenge_)
+                         : WorseThan(new_runs_, other_runs_);
   Pool(other_runs_);
   RunsOf(target_) = other_runs_;
   if (!worse) {
@@ -310,11 +353,12 @@ TrialOutcome& TrialDriver::Interleaved(double judged, TrialOutcome& out) {
 bool TrialDriver::KeepIfReportAgrees(double judged_cost, double learner_cost) {
   // only_when_worse: the accepted trial's own judged cost, no higher than the replaced law's
   // and u^0's means, keeps the law on that one run (true); else the re-runs follow (false).
-  if (!settings_.guard.only_when_worse || !std::isfinite(judged_cost)) return false;
+  const HarmGuardSettings& g = settings_.guard;
+  if ((!g.only_when_worse && g.verify_accepted) || !std::isfinite(judged_cost)) return false;
   const double judged = Compared(judged_cost);
   const Runs& replaced = RunsOf(kept_.valid ? Target::kKept : Target::kInitial);
-  if ((replaced.n > 0 && judged > replaced.mean()) ||
-      (initial_runs_.n > 0 && judged > initial_runs_.mean())) {
+  if (g.verify_accepted && ((replaced.n > 0 && judged > replaced.mean()) ||
+                            (initial_runs_.n > 0 && judged > initial_runs_.mean()))) {
     return false;
   }
   new_runs_ = Runs{};

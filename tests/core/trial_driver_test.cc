@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -559,6 +560,30 @@ TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
   interleave.guard.watch_trials = 3;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, interleave, fallback); },
                    "(verify_trials = 3, watch_trials = 3)");
+  TrialDriverSettings ratio = DriverSettings(Method::kAlg1);
+  ratio.guard.verify_trials = 3;
+  ratio.guard.watch_trials = 3;
+  ratio.guard.watch_ratio = 0.5;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, ratio, fallback); },
+                   "guard.watch_ratio = 0.500000, expected 0 (the mean form) or >= 1");
+  ratio.guard.watch_ratio = std::numeric_limits<double>::quiet_NaN();
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, ratio, fallback); }, "guard.watch_ratio = nan");
+  ratio.guard.watch_ratio = 1.5;
+  ratio.guard.watch_trials = 0;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, ratio, fallback); },
+                   "guard.watch_ratio needs guard.watch_trials >= 2 and guard.verify_trials >= 2 "
+                   "(watch_trials = 0, verify_trials = 3)");
+  TrialDriverSettings keep = DriverSettings(Method::kAlg1);
+  keep.guard.verify_trials = 3;
+  keep.guard.verify_accepted = false;
+  keep.guard.only_when_worse = true;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, keep, fallback); },
+                   "guard.verify_accepted = false excludes guard.only_when_worse and "
+                   "guard.interleave");
+  keep.guard.only_when_worse = false;
+  keep.guard.interleave = true;
+  ExpectThrowsWith([&] { TrialDriver d(p.problem, keep, fallback); },
+                   "guard.verify_accepted = false excludes");
   TrialDriverSettings worse = DriverSettings(Method::kAlg1);
   worse.guard.only_when_worse = true;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, worse, fallback); },
@@ -870,6 +895,117 @@ TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
     EXPECT_FALSE(o[j].remeasured) << "trial " << j;
     EXPECT_GT(o[j].judged_cost, u0_flipped) << "trial " << j;
   }
+}
+
+// verify_accepted = false: every accepted law is kept on its own trial, so without a watch the
+// guarded run is the unguarded run, trial for trial, with no re-run and no revert.
+TEST_F(TrialDriverTest, TheGuardThatDoesNotVerifyKeepsEveryAcceptedLawOnItsTrial) {
+  HarmGuardSettings guard;
+  guard.verify_trials = 3;
+  guard.verify_accepted = false;
+  const GuardedRuns r = RunWithAndWithoutGuard(guard, 40, 40);
+  std::vector<const TrialOutcome*> all;
+  for (const TrialOutcome& o : r.guarded) {
+    EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
+    all.push_back(&o);
+  }
+  EXPECT_GE(ExpectSameDecisions(all, r.unguarded), 3);
+  EXPECT_EQ(r.verifying, 0);
+  EXPECT_EQ(r.reverts, 0);
+}
+
+// The watch's median form (watch_ratio) on the flipped input gain of the test above, with the
+// accepted laws kept on their own trials: the window (the accepted trial, on the unflipped
+// plant, and the kept law's next two trials, on the flipped one) has a median above
+// watch_ratio x u^0's cost, u^0 runs verify_trials times (the challenge) and the learner goes
+// back to it. With watch_initial = false the watch has no law to go back to (u^0 is excluded
+// and the kept law replaced none): the law stays.
+TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio) {
+  TwoModeLq flipped_lq;
+  flipped_lq.b_scale = -1.0;
+  LqProblem flipped(flipped_lq);
+  ModelPlant flipped_plant(flipped.problem);
+  Trajectory measured;
+  flipped_plant.Run(lq.x0, fallback, &measured);
+  const double u0_cost = EvaluateCost(p.problem, measured).total;  // u^0 = 0: B plays no part
+  for (bool initial : {true, false}) {
+    TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+    settings.guard.verify_trials = 3;
+    settings.guard.watch_trials = 3;
+    settings.guard.watch_ratio = 1.5;
+    settings.guard.verify_accepted = false;
+    settings.guard.watch_initial = initial;
+    TrialDriver driver(p.problem, settings, fallback);
+    TrialOutcome accepted;
+    for (int i = 0; i < 60 && driver.learner()->nominal_is_initial(); ++i) {
+      accepted = driver.RunTrial(plant, lq.x0, &measured);
+    }
+    ASSERT_FALSE(driver.learner()->nominal_is_initial()) << "premise: a law is kept";
+    EXPECT_FALSE(accepted.remeasured);  // kept on its own trial
+    std::vector<TrialOutcome> o;
+    for (int j = 0; j < 12 && driver.reverts() == 0; ++j) {
+      o.push_back(driver.RunTrial(flipped_plant, lq.x0, &measured));
+    }
+    ASSERT_GE(o.size(), 2u);
+    std::vector<double> window = {accepted.judged_cost, o[0].judged_cost, o[1].judged_cost};
+    std::sort(window.begin(), window.end());
+    ASSERT_GT(window[1], 1.5 * u0_cost) << "premise: the window's median";
+    if (initial) {
+      ASSERT_EQ(driver.reverts(), 1);
+      ASSERT_EQ(o.size(), 5u);
+      for (size_t j = 2; j < 5; ++j) {
+        EXPECT_TRUE(o[j].ran_fallback && o[j].remeasured) << "trial " << j;
+        EXPECT_EQ(o[j].judged_cost, u0_cost) << "trial " << j;
+      }
+      EXPECT_TRUE(o.back().reverted);
+      EXPECT_TRUE(driver.learner()->nominal_is_initial());
+    } else {
+      EXPECT_EQ(driver.reverts(), 0);
+      for (const TrialOutcome& x : o) EXPECT_FALSE(x.remeasured) << "trial " << x.trial;
+      EXPECT_FALSE(driver.learner()->nominal_is_initial());
+    }
+  }
+}
+
+// The other side of the median watch's decision: the same window, but u^0's challenge runs start
+// 200 x farther out (u^0 = 0: its cost is 4e4 x its cost from x0): their median is above the
+// window's, the kept law stays and the learner goes on from it.
+TEST_F(TrialDriverTest, TheMedianWatchKeepsALawWhoseChallengeMeasuresWorse) {
+  TwoModeLq flipped_lq;
+  flipped_lq.b_scale = -1.0;
+  LqProblem flipped(flipped_lq);
+  ModelPlant flipped_plant(flipped.problem);
+  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
+  settings.guard.verify_trials = 3;
+  settings.guard.watch_trials = 3;
+  settings.guard.watch_ratio = 1.5;
+  settings.guard.verify_accepted = false;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  TrialOutcome accepted;
+  for (int i = 0; i < 60 && driver.learner()->nominal_is_initial(); ++i) {
+    accepted = driver.RunTrial(plant, lq.x0, &measured);
+  }
+  ASSERT_FALSE(driver.learner()->nominal_is_initial()) << "premise: a law is kept";
+  std::vector<double> window = {accepted.judged_cost};
+  std::vector<double> challenge;
+  for (int j = 0; j < 12 && challenge.size() < 3; ++j) {
+    const bool in_challenge = driver.verifying() > 0;
+    const TrialOutcome o = driver.RunTrial(
+        flipped_plant, in_challenge ? Vector(200.0 * lq.x0) : Vector(lq.x0), &measured);
+    if (in_challenge) {
+      EXPECT_TRUE(o.ran_fallback && o.remeasured) << "trial " << o.trial;
+      challenge.push_back(o.judged_cost);
+    } else if (challenge.empty() && window.size() < 3) {
+      window.push_back(o.judged_cost);
+    }
+  }
+  ASSERT_EQ(challenge.size(), 3u) << "premise: the window's median starts a challenge";
+  std::sort(window.begin(), window.end());
+  std::sort(challenge.begin(), challenge.end());
+  ASSERT_GT(challenge[1], window[1]) << "premise: u^0's challenge measures worse";
+  EXPECT_EQ(driver.reverts(), 0);
+  EXPECT_FALSE(driver.learner()->nominal_is_initial());
 }
 
 // A kept law's I^i is the mean learner cost of its re-runs, not the accepted trial's own cost
