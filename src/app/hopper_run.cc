@@ -122,6 +122,9 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.verify_interleave) config.driver.guard.interleave = *l.verify_interleave;
   if (l.verify_log) config.driver.guard.log_cost = *l.verify_log;
   if (l.verify_when_worse) config.driver.guard.only_when_worse = *l.verify_when_worse;
+  if (l.verify_when_never) config.driver.guard.verify_accepted = !*l.verify_when_never;
+  if (l.watch_ratio) config.driver.guard.watch_ratio = *l.watch_ratio;
+  if (l.watch_u0) config.driver.guard.watch_initial = *l.watch_u0;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.blend_feedforward) learner.blend_feedforward = *l.blend_feedforward;

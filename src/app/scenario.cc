@@ -111,6 +111,7 @@ const std::vector<ElementSpec>& Elements() {
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
         Number("verify_margin", kNonNegative), Text("verify_debias"), Text("verify_interleave"),
         Text("verify_log"), Text("verify_when"), Integer("watch_hops", 0),
+        Number("watch_ratio", kNonNegative), Text("watch_u0"),
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},
@@ -324,9 +325,17 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
     l->verify_interleave = *v == "on";
   }
   if (auto v = GetChoice(path, e, "verify_log", "off", "on")) l->verify_log = *v == "on";
-  if (auto v = GetChoice(path, e, "verify_when", "always", "worse")) {
-    l->verify_when_worse = *v == "worse";
+  if (const char* v = e->Attribute("verify_when")) {
+    const std::string when = v;
+    if (when != "always" && when != "worse" && when != "never") {
+      Fail(path, e->GetLineNum(),
+           Where(e) + " verify_when=\"" + when + "\" (expected always, worse or never)");
+    }
+    l->verify_when_worse = when == "worse";
+    l->verify_when_never = when == "never";
   }
+  l->watch_ratio = GetNumber(path, e, "watch_ratio");
+  if (auto v = GetChoice(path, e, "watch_u0", "off", "on")) l->watch_u0 = *v == "on";
   l->curvature_scale_min = GetNumber(path, e, "curvature_scale_min");
 }
 

@@ -258,7 +258,22 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   EXPECT_DOUBLE_EQ(c.anchor_weight, 0.8);
   ExpectError(Fill(fmt, "verify_interleave='2'"), {"verify_interleave=\"2\"", "off or on"});
   ExpectError(Fill(fmt, "verify_when='sometimes'"),
-              {"verify_when=\"sometimes\"", "always or worse"});
+              {"verify_when=\"sometimes\"", "always, worse or never"});
+  // The median watch: accepted laws kept on their own trials, a ratio, u^0 excluded.
+  EXPECT_TRUE(c.driver.guard.verify_accepted);
+  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 0.0);
+  EXPECT_TRUE(c.driver.guard.watch_initial);
+  c = ControllerConfigFor(
+      LoadScenario(Write(Fill(fmt, "verify_hops='3' watch_hops='8' verify_when='never' "
+                                   "watch_ratio='1.5' watch_u0='off'"))),
+      HopperParams());
+  EXPECT_FALSE(c.driver.guard.verify_accepted);
+  EXPECT_FALSE(c.driver.guard.only_when_worse);
+  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 1.5);
+  EXPECT_FALSE(c.driver.guard.watch_initial);
+  EXPECT_EQ(c.driver.guard.watch_trials, 8);
+  ExpectError(Fill(fmt, "watch_u0='no'"), {"watch_u0=\"no\"", "off or on"});
+  ExpectError(Fill(fmt, "watch_ratio='-1'"), {"watch_ratio"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {
