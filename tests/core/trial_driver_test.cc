@@ -805,6 +805,19 @@ TEST_F(TrialDriverTest, TheHarmGuardKeepsEveryLawThatMeasuresBetter) {
   EXPECT_EQ(r.reverts, 0);
 }
 
+// A guarded run with no re-run and no revert that decides trial for trial as the unguarded one
+// (at least 3 accepted trials compared).
+void ExpectTheUnguardedRun(const GuardedRuns& r) {
+  std::vector<const TrialOutcome*> all;
+  for (const TrialOutcome& o : r.guarded) {
+    EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
+    all.push_back(&o);
+  }
+  EXPECT_GE(ExpectSameDecisions(all, r.unguarded), 3);
+  EXPECT_EQ(r.verifying, 0);
+  EXPECT_EQ(r.reverts, 0);
+}
+
 // only_when_worse re-runs an accepted law only when its trial's judged cost is above the
 // replaced law's or u^0's. With the learner's own cost judged every accepted trial agrees with
 // the acceptance: no re-run at all, and the run is the unguarded run, trial for trial. With the
@@ -814,15 +827,7 @@ TEST_F(TrialDriverTest, TheGuardOnlyWhenWorseReRunsTheLawsTheReportedCostContrad
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
   settings.guard.only_when_worse = true;
-  const GuardedRuns agreeing = RunWithAndWithoutGuard(settings.guard, 40, 40);
-  std::vector<const TrialOutcome*> all;
-  for (const TrialOutcome& o : agreeing.guarded) {
-    EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
-    all.push_back(&o);
-  }
-  EXPECT_GE(ExpectSameDecisions(all, agreeing.unguarded), 3);
-  EXPECT_EQ(agreeing.verifying, 0);
-  EXPECT_EQ(agreeing.reverts, 0);
+  ExpectTheUnguardedRun(RunWithAndWithoutGuard(settings.guard, 40, 40));
 
   HeavyInputJudged h(lq, p);
   const TrialDriver::CostReference reference = h.reference();
@@ -843,6 +848,17 @@ TEST_F(TrialDriverTest, TheGuardOnlyWhenWorseReRunsTheLawsTheReportedCostContrad
   EXPECT_EQ(contradicted.reverts(), every.reverts());
 }
 
+// The two-mode LQ with its input gain flipped (a motor wired the other way round), as a plant.
+struct FlippedLq {
+  static TwoModeLq Flip() {
+    TwoModeLq l;
+    l.b_scale = -1.0;
+    return l;
+  }
+  LqProblem problem{Flip()};
+  mutable ModelPlant plant{problem.problem};
+};
+
 // A kept law that later measures worse: the plant's input gain flips after the learner kept a
 // law (a motor wired the other way round, an extreme of a weaker motor). u^0 = 0 uses no input
 // and does not notice; every law that uses input now costs more. The guard watches the kept
@@ -850,10 +866,8 @@ TEST_F(TrialDriverTest, TheGuardOnlyWhenWorseReRunsTheLawsTheReportedCostContrad
 // 3 times, and the learner goes back to u^0's nominal. Without the watch (the default) the law
 // stays.
 TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
-  TwoModeLq flipped_lq;
-  flipped_lq.b_scale = -1.0;
-  LqProblem flipped(flipped_lq);
-  ModelPlant flipped_plant(flipped.problem);
+  const FlippedLq flipped;
+  ModelPlant& flipped_plant = flipped.plant;
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
   settings.guard.watch_trials = 3;
@@ -903,15 +917,7 @@ TEST_F(TrialDriverTest, TheGuardThatDoesNotVerifyKeepsEveryAcceptedLawOnItsTrial
   HarmGuardSettings guard;
   guard.verify_trials = 3;
   guard.verify_accepted = false;
-  const GuardedRuns r = RunWithAndWithoutGuard(guard, 40, 40);
-  std::vector<const TrialOutcome*> all;
-  for (const TrialOutcome& o : r.guarded) {
-    EXPECT_FALSE(o.remeasured) << "trial " << o.trial;
-    all.push_back(&o);
-  }
-  EXPECT_GE(ExpectSameDecisions(all, r.unguarded), 3);
-  EXPECT_EQ(r.verifying, 0);
-  EXPECT_EQ(r.reverts, 0);
+  ExpectTheUnguardedRun(RunWithAndWithoutGuard(guard, 40, 40));
 }
 
 // The watch's median form (watch_ratio) on the flipped input gain of the test above, with the
@@ -921,10 +927,8 @@ TEST_F(TrialDriverTest, TheGuardThatDoesNotVerifyKeepsEveryAcceptedLawOnItsTrial
 // back to it. With watch_initial = false the watch has no law to go back to (u^0 is excluded
 // and the kept law replaced none): the law stays.
 TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio) {
-  TwoModeLq flipped_lq;
-  flipped_lq.b_scale = -1.0;
-  LqProblem flipped(flipped_lq);
-  ModelPlant flipped_plant(flipped.problem);
+  const FlippedLq flipped;
+  ModelPlant& flipped_plant = flipped.plant;
   Trajectory measured;
   flipped_plant.Run(lq.x0, fallback, &measured);
   const double u0_cost = EvaluateCost(p.problem, measured).total;  // u^0 = 0: B plays no part
@@ -971,10 +975,8 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
 // 200 x farther out (u^0 = 0: its cost is 4e4 x its cost from x0): their median is above the
 // window's, the kept law stays and the learner goes on from it.
 TEST_F(TrialDriverTest, TheMedianWatchKeepsALawWhoseChallengeMeasuresWorse) {
-  TwoModeLq flipped_lq;
-  flipped_lq.b_scale = -1.0;
-  LqProblem flipped(flipped_lq);
-  ModelPlant flipped_plant(flipped.problem);
+  const FlippedLq flipped;
+  ModelPlant& flipped_plant = flipped.plant;
   TrialDriverSettings settings = DriverSettings(Method::kAlg1);
   settings.guard.verify_trials = 3;
   settings.guard.watch_trials = 3;
