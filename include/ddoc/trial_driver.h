@@ -278,8 +278,8 @@ class TrialDriver {
   Runs initial_runs_, kept_runs_, previous_runs_;
   std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
   int window_count_ = 0;
-  double window_median_ = 0;        // watch_ratio: the window's median at the challenge
-  std::vector<double> challenge_;   // watch_ratio: the challenge's judged costs
+  std::vector<double> challenge_;  // watch_ratio: the challenge's judged costs (the window
+                                   // stays as it was until the decision)
   PooledSpread pooled_;        // within-law deviations of every finished law's runs
   OnlineController* pending_law_ = nullptr;  // the learner's next trial, waiting for the guard
   int reverts_ = 0;

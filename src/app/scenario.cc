@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <initializer_list>
 #include <limits>
 #include <utility>
 #include <sstream>
@@ -228,16 +229,25 @@ double RequiredNumber(const std::string& file, const Element* e, const char* att
 
 // attr="first" or attr="second"; anything else fails naming both.
 std::optional<std::string> GetChoice(const std::string& file, const Element* e, const char* attr,
-                                     const char* first, const char* second) {
+                                     std::initializer_list<const char*> choices) {
   (void)FindAttribute(e, attr);
   const char* text = e->Attribute(attr);
   if (text == nullptr) return std::nullopt;
   const std::string v = text;
-  if (v != first && v != second) {
-    Fail(file, e->GetLineNum(),
-         Where(e) + " " + attr + "=\"" + v + "\" (expected " + first + " or " + second + ")");
+  if (std::find(choices.begin(), choices.end(), v) == choices.end()) {
+    std::string expected;  // "a or b", "a, b or c"
+    for (size_t i = 0; i < choices.size(); ++i) {
+      if (i > 0) expected += i + 1 == choices.size() ? " or " : ", ";
+      expected += choices.begin()[i];
+    }
+    Fail(file, e->GetLineNum(), Where(e) + " " + attr + "=\"" + v + "\" (expected " + expected + ")");
   }
   return v;
+}
+
+std::optional<std::string> GetChoice(const std::string& file, const Element* e, const char* attr,
+                                     const char* first, const char* second) {
+  return GetChoice(file, e, attr, {first, second});
 }
 
 std::string ResolvePath(const std::string& scenario_file, const char* path) {
@@ -325,14 +335,9 @@ void ParseLearning(const std::string& path, const Element* e, LearningOverrides*
     l->verify_interleave = *v == "on";
   }
   if (auto v = GetChoice(path, e, "verify_log", "off", "on")) l->verify_log = *v == "on";
-  if (const char* v = e->Attribute("verify_when")) {
-    const std::string when = v;
-    if (when != "always" && when != "worse" && when != "never") {
-      Fail(path, e->GetLineNum(),
-           Where(e) + " verify_when=\"" + when + "\" (expected always, worse or never)");
-    }
-    l->verify_when_worse = when == "worse";
-    l->verify_when_never = when == "never";
+  if (auto v = GetChoice(path, e, "verify_when", {"always", "worse", "never"})) {
+    l->verify_when_worse = *v == "worse";
+    l->verify_when_never = *v == "never";
   }
   l->watch_ratio = GetNumber(path, e, "watch_ratio");
   if (auto v = GetChoice(path, e, "watch_u0", "off", "on")) l->watch_u0 = *v == "on";

@@ -91,7 +91,6 @@ void TrialDriver::Reset() {
   phase_ = Phase::kNone;
   window_.assign(static_cast<size_t>(settings_.guard.watch_trials), 0.0);
   window_count_ = 0;
-  window_median_ = 0;
   challenge_.clear();
   new_learner_sum_ = 0;
   initial_ = kept_ = previous_ = LearnerCheckpoint{};
@@ -211,8 +210,7 @@ void TrialDriver::Watch(double judged) {
     if (!initial && !previous) return;
     to_initial = initial && (!previous || initial_runs_.mean() <= previous_runs_.mean());
     const double best = to_initial ? initial_runs_.mean() : previous_runs_.mean();
-    window_median_ = Median(window_);
-    if (!(window_median_ > g.watch_ratio * best)) return;
+    if (!(Median(window_) > g.watch_ratio * best)) return;
   } else {
     const bool suspect =
         (previous_.valid && WorseThan(recent, previous_runs_)) || WorseThan(recent, initial_runs_);
@@ -271,7 +269,7 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
   // The other law's fresh runs are in: the law on trial is abandoned when it is worse.
   phase_ = Phase::kNone;
   const bool worse = watch_ && settings_.guard.watch_ratio > 0
-                         ? !challenge_.empty() && window_median_ > Median(challenge_)
+                         ? !challenge_.empty() && Median(window_) > Median(challenge_)
                          : WorseThan(new_runs_, other_runs_);
   Pool(other_runs_);
   RunsOf(target_) = other_runs_;
