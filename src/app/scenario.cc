@@ -240,7 +240,8 @@ std::optional<std::string> GetChoice(const std::string& file, const Element* e, 
       if (i > 0) expected += i + 1 == choices.size() ? " or " : ", ";
       expected += choices.begin()[i];
     }
-    Fail(file, e->GetLineNum(), Where(e) + " " + attr + "=\"" + v + "\" (expected " + expected + ")");
+    Fail(file, e->GetLineNum(),
+         Where(e) + " " + attr + "=\"" + v + "\" (expected " + expected + ")");
   }
   return v;
 }
