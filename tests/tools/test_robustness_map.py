@@ -393,6 +393,79 @@ class ReplicateTest(TempDirTest):
         self.assertIn("at least two", r.stderr)
 
 
+class RoomTest(TempDirTest):
+    """room: u^0 against the law of the identified mass, figures computed here by hand."""
+
+    def mass_map(self, name, ident, costs):
+        """A whole mass map of robots 8, 9, 10 and 12 kg (c_d 0, 0.5 m/s), methods alg1 and
+        ocfb, with `--identification ident`; costs[(mass, method)] = (last-10 cost, sd,
+        accepted), cost None for a fall."""
+        args = ["--maps", "mass", "--masses", "8,9,10,12", "--drags", "0", "--speeds", "0.5",
+                "--methods", "alg1,ocfb"]
+        if ident != "off":
+            args += ["--identification", ident]
+        grid = rm.grid_from_args(rm.run_parser().parse_args(args))
+        rows = {}
+        for _, case, keys in rm.cases(grid):
+            cost, sd, accepted = costs[(int(keys["mass"]), keys["method"])]
+            rows[case] = fake_row("mass", case, keys["method"], cost, sd, 7,
+                                  mass=rm.fmt(keys["mass"]), c_d="0", speed="0.5",
+                                  identification=keys["identification"], accepted=accepted)
+        d = os.path.join(self.tmp, name)
+        rm.write_outputs(d, grid, (0, 1), set(rows), rows)
+        return d
+
+    def test_room_per_condition_and_what_algorithm_1_took(self):
+        fixed = self.mass_map("fixed", "off", {
+            (8, "ocfb"): (1.20, 0.05, ""), (8, "alg1"): (1.10, 0.01, "2"),
+            (9, "ocfb"): (1.10, 0.001, ""), (9, "alg1"): (1.12, 0.001, "0"),
+            (10, "ocfb"): (1.00, 0.002, ""), (10, "alg1"): (1.00, 0.002, "3"),
+            (12, "ocfb"): (None, 0, ""), (12, "alg1"): (1.30, 0.02, "1")})
+        ident = self.mass_map("ident", "on", {
+            (8, "ocfb"): (1.00, 0.01, ""), (9, "ocfb"): (1.05, 0.002, ""),
+            (10, "ocfb"): (0.995, 0.004, ""), (12, "ocfb"): (1.25, 0.01, ""),
+            (8, "alg1"): (1.0, 0.01, "0"), (9, "alg1"): (1.0, 0.01, "0"),
+            (10, "alg1"): (1.0, 0.01, "0"), (12, "alg1"): (1.0, 0.01, "0")})
+        out = os.path.join(self.tmp, "room.md")
+        r = run_tool("robustness_map", "room", fixed, ident, "--out", out)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        # 8 kg: room 0.20 = 16.7 % of 1.20, 0.20 / max(0.05, 0.01) = 4.0 spreads; Algorithm 1
+        # took (1.20 - 1.10) / 0.20 = 50 %.
+        self.assertIn("| 8 | 0 | 0.5 | 1.200 +- 0.050 | 1.000 +- 0.010 | 16.7 % | 4.0 | 1.100 "
+                      "| 2 | 50 % |", r.stdout)
+        # 9 kg: 0.05 = 4.5 % of 1.10, 0.05 / 0.002 = 25 spreads; took (1.10 - 1.12) / 0.05 = -40 %.
+        self.assertIn("| 9 | 0 | 0.5 | 1.100 +- 0.001 | 1.050 +- 0.002 | 4.5 % | 25.0 | 1.120 "
+                      "| 0 | -40 % |", r.stdout)
+        # 10 kg: 0.005 = 0.5 % (below 1 %: no share), 0.005 / 0.004 = 1.25 spreads (1.3: the
+        # difference 1.000 - 0.995 is a little above 0.005 in binary).
+        self.assertIn("| 10 | 0 | 0.5 | 1.000 +- 0.002 | 0.995 +- 0.004 | 0.5 % | 1.3 | 1.000 "
+                      "| 3 |  |", r.stdout)
+        self.assertNotIn("| 12 |", r.stdout)  # u^0 fell: no room to measure
+        self.assertIn("both laws survive: 3 of 4 (u^0 or the robot's-mass law fell: 12/0/0.5)",
+                      r.stdout)
+        # Rooms 16.7, 4.5, 0.5 % (median 4.5), spreads 4.0, 25, 1.25 (median 4.0): one below
+        # 1 %, one below 2 spreads.
+        self.assertIn("Room below 1 % of u^0's cost: 1 of 3; below 2 hop-to-hop spreads: 1 of 3; "
+                      "median room 4.5 % (4.0 spreads)", r.stdout)
+        # Accepted: 3 where the room is below 1 %, median of 2 and 0 = 1.0 elsewhere; shares
+        # 50 and -40 %: median 5 %.
+        self.assertIn("median accepted trials: 3.0 where the room is below 1 % (1 survive), 1.0 "
+                      "elsewhere (2 survive); the share of the room it took there: median 5 % "
+                      "over 2.", r.stdout)
+        with open(out) as f:
+            self.assertEqual(f.read(), r.stdout)
+
+    def test_room_names_the_map_it_lacks(self):
+        fixed = self.mass_map("fixed", "off", {(m, k): (1.0, 0.01, "0") for m in (8, 9, 10, 12)
+                                               for k in ("alg1", "ocfb")})
+        r = run_tool("robustness_map", "room", fixed, fixed)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("has no ocfb runs with identification on", r.stderr)
+        r = run_tool("robustness_map", "room", fixed, os.path.join(self.tmp, "nowhere"))
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("not a robustness_map output", r.stderr)
+
+
 class ShardMergeTest(TempDirTest):
     def run_map(self, out, *extra):
         r = run_tool("robustness_map", *SMALL, "--out", out, *extra)
@@ -573,9 +646,10 @@ class UsageTest(TempDirTest):
         self.assertEqual(r.returncode, 0, r.stderr)
         description = r.stdout.split("\n\n")[1]
         self.assertTrue(description.rstrip().endswith("."), description)
-        for command in ("merge SLICE_DIR", "report DIR", "spread DIR", "slurm-task", "exit status"):
+        for command in ("merge SLICE_DIR", "report DIR", "spread DIR", "room FIXED", "slurm-task",
+                        "exit status"):
             self.assertIn(command, r.stdout)
-        for command in ("merge", "report", "slurm-task", "spread"):
+        for command in ("merge", "report", "slurm-task", "spread", "room"):
             r = run_tool("robustness_map", command, "--help")
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn(f"robustness_map {command}", r.stdout)
