@@ -449,7 +449,7 @@ class RoomTest(TempDirTest):
                       "median room 4.5 % (4.0 spreads)", r.stdout)
         # Accepted: 3 where the room is below 1 %, median of 2 and 0 = 1.0 elsewhere; shares
         # 50 and -40 %: median 5 %.
-        self.assertIn("median accepted trials: 3.0 where the room is below 1 % (1 survive), 1.0 "
+        self.assertIn("median accepted trials: 3 where the room is below 1 % (1 survive), 1 "
                       "elsewhere (2 survive); the share of the room it took there: median 5 % "
                       "over 2.", r.stdout)
         with open(out) as f:
