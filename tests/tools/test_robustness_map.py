@@ -455,6 +455,18 @@ class RoomTest(TempDirTest):
         with open(out) as f:
             self.assertEqual(f.read(), r.stdout)
 
+    def test_a_zero_room_without_spread_is_no_room(self):
+        # 10 kg: both laws cost 1.0 with no spread at all: 0 spreads, not an infinite number.
+        costs = {(m, k): (1.0, 0.0, "0") for m in (8, 9, 10, 12) for k in ("alg1", "ocfb")}
+        fixed = self.mass_map("fixed", "off", costs)
+        ident = self.mass_map("ident", "on", costs)
+        r = run_tool("robustness_map", "room", fixed, ident)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("| 10 | 0 | 0.5 | 1.000 +- 0.000 | 1.000 +- 0.000 | 0.0 % | 0.0 | 1.000 "
+                      "| 0 |  |", r.stdout)
+        self.assertIn("Room below 1 % of u^0's cost: 4 of 4; below 2 hop-to-hop spreads: 4 of 4",
+                      r.stdout)
+
     def test_room_names_the_map_it_lacks(self):
         fixed = self.mass_map("fixed", "off", {(m, k): (1.0, 0.01, "0") for m in (8, 9, 10, 12)
                                                for k in ("alg1", "ocfb")})
