@@ -71,7 +71,8 @@ struct HarmGuardSettings {
   /// median is below the window's (a few pushed hops hardly move a median). Needs watch_trials.
   double watch_ratio = 0.0;
   /// false: the watch goes back only to the law the kept one replaced, never to u^0 (whose few
-  /// fresh runs look good on a robot where it has no stable hop). Default true.
+  /// fresh runs look good on a robot where it has no stable hop). Default true. A user can also
+  /// withdraw u^0 while the run goes on: TrialDriver::SetInitialCandidate.
   bool watch_initial = true;
 };
 
@@ -192,6 +193,12 @@ class TrialDriver {
   void Freeze() { frozen_ = true; }
   bool frozen() const { return frozen_; }
 
+  /// false: u^0 is not a law the watch goes back to (HarmGuardSettings::watch_initial) until set
+  /// true again, for a user who learns during the run that u^0 may not hold the plant (the
+  /// hopper: a robot heavier than its model, docs/hopper.md). Reset() leaves it. Default true.
+  void SetInitialCandidate(bool candidate) { initial_candidate_ = candidate; }
+  bool initial_candidate() const { return initial_candidate_; }
+
   /// One trial on a plant from x0: runs law() (the plant calls BeginTrial), then CompleteTrial.
   /// The measured trajectory is returned in *measured.
   TrialOutcome RunTrial(Plant& plant, const ConstVectorRef& x0, Trajectory* measured);
@@ -227,6 +234,7 @@ class TrialDriver {
   int trial_ = 0;
   int warmup_trials_ = 1;  // settings_.warmup_trials plus DelayInitialize's
   bool frozen_ = false;
+  bool initial_candidate_ = true;  // SetInitialCandidate
   // Harm guard: judged costs of a law's runs (count, sum, sum of squared deviations).
   struct Runs {
     int n = 0;

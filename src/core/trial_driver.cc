@@ -202,20 +202,20 @@ void TrialDriver::Watch(double judged) {
   Runs recent;
   for (double c : window_) recent.Add(c);
   bool to_initial = false;
+  // u^0 is a law to go back to unless watch_initial or the user (SetInitialCandidate) withdrew it.
+  const bool initial = g.watch_initial && initial_candidate_ && initial_runs_.n > 0;
   if (g.watch_ratio > 0) {
-    // The median form: against the better of the replaced law's and (watch_initial) u^0's
-    // records, by a ratio.
-    const bool initial = g.watch_initial && initial_runs_.n > 0;
+    // The median form: against the better of the replaced law's and u^0's records, by a ratio.
     const bool previous = previous_.valid && previous_runs_.n > 0;
     if (!initial && !previous) return;
     to_initial = initial && (!previous || initial_runs_.mean() <= previous_runs_.mean());
     const double best = to_initial ? initial_runs_.mean() : previous_runs_.mean();
     if (!(Median(window_) > g.watch_ratio * best)) return;
   } else {
-    const bool suspect =
-        (previous_.valid && WorseThan(recent, previous_runs_)) || WorseThan(recent, initial_runs_);
+    const bool suspect = (previous_.valid && WorseThan(recent, previous_runs_)) ||
+                         (initial && WorseThan(recent, initial_runs_));
     if (!suspect) return;
-    to_initial = !previous_.valid || initial_runs_.mean() <= previous_runs_.mean();
+    to_initial = initial && (!previous_.valid || initial_runs_.mean() <= previous_runs_.mean());
   }
   new_runs_ = recent;
   window_count_ = 0;

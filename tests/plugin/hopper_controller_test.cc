@@ -67,6 +67,17 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   ControllerConfig idle_latch;
   idle_latch.overspeed_latch = 0.05;
   rejected(idle_latch, "overspeed_latch = 0.05, expected 0 unless the reference moves");
+  ControllerConfig bad_u0_mass;
+  bad_u0_mass.watch_u0_max_mass = -1.0;
+  rejected(bad_u0_mass, "watch_u0_max_mass = -1, expected finite and >= 0");
+  // A mass limit for u^0 needs a watch that may go back to u^0.
+  ControllerConfig idle_u0_mass;
+  idle_u0_mass.watch_u0_max_mass = 1.05;
+  rejected(idle_u0_mass, "watch_u0_max_mass = 1.05, expected 0 unless the harm guard's watch");
+  idle_u0_mass.driver.guard.verify_trials = 3;
+  idle_u0_mass.driver.guard.watch_trials = 8;
+  idle_u0_mass.driver.guard.watch_initial = false;
+  rejected(idle_u0_mass, "watch_u0_max_mass = 1.05, expected 0 unless the harm guard's watch");
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
@@ -538,6 +549,35 @@ TEST(HopperControllerTest, TheOverspeedLatchHoldsTheGaitOnARobotThatRunsAway) {
     } else {
       EXPECT_EQ(first, -1) << "latch " << latch;
     }
+  }
+}
+
+TEST(HopperControllerTest, UZeroIsWithdrawnFromTheWatchOnARobotHeavierThanTheModel) {
+  // watch_u0_max_mass: after each hop the identified mass decides whether the watch may go back
+  // to u^0. The 10 kg model's u^0 stays a candidate on the 8 kg robot and on the 12 kg one
+  // without a limit or with a limit above 1.2; a limit of 1.05 withdraws it there.
+  struct Case {
+    const char* mjcf;
+    double limit;
+    bool candidate;
+  };
+  for (const Case& k : {Case{"hopper_m8.xml", 1.05, true}, Case{"hopper_m12.xml", 1.05, false},
+                        Case{"hopper_m12.xml", 1.25, true}, Case{"hopper_m12.xml", 0.0, true}}) {
+    ControllerConfig config;
+    config.driver.guard.verify_trials = 3;
+    config.driver.guard.watch_trials = 8;
+    config.driver.guard.watch_ratio = 1.5;
+    config.driver.guard.verify_accepted = false;
+    config.watch_u0_max_mass = k.limit;
+    Robot rig(k.mjcf, config, false);
+    ASSERT_TRUE(rig.ok());
+    const std::vector<HopReport> reports = rig.Run(2, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 2u);
+    const double ratio = reports.back().identified_mass / reports.back().model_mass;
+    ASSERT_NEAR(ratio, k.mjcf == std::string("hopper_m8.xml") ? 0.8 : 1.2, 0.02)
+        << "premise: the identified mass";
+    EXPECT_EQ(rig.c().driver().initial_candidate(), k.candidate)
+        << k.mjcf << ", limit " << k.limit;
   }
 }
 
