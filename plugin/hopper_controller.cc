@@ -68,14 +68,12 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(c.overspeed_latch >= 0.0) || !std::isfinite(c.overspeed_latch)) {
     fail("overspeed_latch", c.overspeed_latch, "finite and >= 0");
   }
-  if (!(c.watch_u0_max_mass >= 0.0) || !std::isfinite(c.watch_u0_max_mass)) {
-    fail("watch_u0_max_mass", c.watch_u0_max_mass, "finite and >= 0");
+  if (!(c.watch_max_mass >= 0.0) || !std::isfinite(c.watch_max_mass)) {
+    fail("watch_max_mass", c.watch_max_mass, "finite and >= 0");
   }
-  if (c.watch_u0_max_mass > 0.0 &&
-      !(c.driver.guard.watch_trials > 0 && c.driver.guard.watch_initial)) {
-    fail("watch_u0_max_mass", c.watch_u0_max_mass,
-         "0 unless the harm guard's watch may go back to u^0 (driver.guard.watch_trials >= 2, "
-         "watch_initial)");
+  if (c.watch_max_mass > 0.0 && c.driver.guard.watch_trials == 0) {
+    fail("watch_max_mass", c.watch_max_mass,
+         "0 unless the harm guard watches (driver.guard.watch_trials >= 2)");
   }
   if (c.overspeed_latch > 0.0 &&
       !(c.anchor_reference && c.anchor_weight < 1.0 && c.reference_filter < 1.0)) {
@@ -702,8 +700,8 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   const TermsIdentification::Estimate terms = terms_id_.estimate();
   r.identified_mass = estimate.mass;
   r.model_mass = model_.params().M;
-  if (config_.watch_u0_max_mass > 0) {
-    initial_candidate_ = !(estimate.mass > config_.watch_u0_max_mass * model_.params().M);
+  if (config_.watch_max_mass > 0) {
+    watching_ = !(estimate.mass > config_.watch_max_mass * model_.params().M);
   }
   r.identified_terms = terms;
   const HopperParams& model = model_.params();
@@ -772,7 +770,7 @@ void HopperController::RunOffline() {
   const long steps = driver_->integration_steps();
   try {
     recorders_[1 - recording_].Finish(&trial_);
-    driver_->SetInitialCandidate(initial_candidate_);
+    driver_->SetWatching(watching_);
     outcome_ = driver_->CompleteTrial(trial_);
     outcome_latched_ = *latched_;
     OnlineController* learned = driver_->learned_law();

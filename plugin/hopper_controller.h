@@ -145,10 +145,10 @@ struct ControllerConfig {
   bool offline_thread = false;
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
   IdentificationSettings identification;     ///< mass estimate always; acting on it off
-  /// > 0: u^0 is a law the harm guard's watch may go back to only while the identified mass
+  /// > 0: the harm guard's watch goes back to an earlier law only while the identified mass
   /// (every hop, whether or not identification acts) is at most this x the model's M
-  /// (TrialDriver::SetInitialCandidate); 0 (default) = always. docs/hopper.md.
-  double watch_u0_max_mass = 0.0;
+  /// (TrialDriver::SetWatching); 0 (default) = always. docs/hopper.md.
+  double watch_max_mass = 0.0;
   /// Directory of stored u^0 laws (plugin/law_cache.h): Create loads u^0 from it when the model
   /// solve's inputs and binaries match, else solves and stores. "" (default) = always solve.
   std::string law_cache;
@@ -371,7 +371,7 @@ class HopperController {
 
   // The offline part: the hop handed over, its result, and the law it makes.
   std::atomic<Job> job_{Job::kIdle};
-  bool initial_candidate_ = true;  // watch_u0_max_mass, from the last hop's mass estimate
+  bool watching_ = true;  // watch_max_mass, from the last hop's mass estimate
   Trajectory trial_;                    // the handed-over hop (offline side)
   TrialOutcome outcome_;                // its result (offline side)
   std::shared_ptr<bool> latched_ = std::make_shared<bool>(false);  // the overspeed latch (offline)

@@ -72,7 +72,7 @@ struct HarmGuardSettings {
   double watch_ratio = 0.0;
   /// false: the watch goes back only to the law the kept one replaced, never to u^0 (whose few
   /// fresh runs look good on a robot where it has no stable hop). Default true. A user can also
-  /// withdraw u^0 while the run goes on: TrialDriver::SetInitialCandidate.
+  /// suspend the watch while the run goes on: TrialDriver::SetWatching.
   bool watch_initial = true;
 };
 
@@ -193,11 +193,12 @@ class TrialDriver {
   void Freeze() { frozen_ = true; }
   bool frozen() const { return frozen_; }
 
-  /// false: u^0 is not a law the watch goes back to (HarmGuardSettings::watch_initial) until set
-  /// true again, for a user who learns during the run that u^0 may not hold the plant (the
-  /// hopper: a robot heavier than its model, docs/hopper.md). Reset() leaves it. Default true.
-  void SetInitialCandidate(bool candidate) { initial_candidate_ = candidate; }
-  bool initial_candidate() const { return initial_candidate_; }
+  /// false: the harm guard's watch (HarmGuardSettings::watch_trials) still records the kept
+  /// law's judged costs but goes back to no law until set true again, for a user who learns
+  /// during the run that no earlier law may hold the plant (the hopper: a robot heavier than its
+  /// model, docs/hopper.md). Reset() leaves it. Default true.
+  void SetWatching(bool watching) { watching_ = watching; }
+  bool watching() const { return watching_; }
 
   /// One trial on a plant from x0: runs law() (the plant calls BeginTrial), then CompleteTrial.
   /// The measured trajectory is returned in *measured.
@@ -234,7 +235,7 @@ class TrialDriver {
   int trial_ = 0;
   int warmup_trials_ = 1;  // settings_.warmup_trials plus DelayInitialize's
   bool frozen_ = false;
-  bool initial_candidate_ = true;  // SetInitialCandidate
+  bool watching_ = true;  // SetWatching
   // Harm guard: judged costs of a law's runs (count, sum, sum of squared deviations).
   struct Runs {
     int n = 0;

@@ -125,7 +125,7 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.verify_when_never) config.driver.guard.verify_accepted = !*l.verify_when_never;
   if (l.watch_ratio) config.driver.guard.watch_ratio = *l.watch_ratio;
   if (l.watch_u0) config.driver.guard.watch_initial = *l.watch_u0;
-  if (l.watch_u0_mass) config.watch_u0_max_mass = *l.watch_u0_mass;
+  if (l.watch_max_mass) config.watch_max_mass = *l.watch_max_mass;
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.blend_feedforward) learner.blend_feedforward = *l.blend_feedforward;

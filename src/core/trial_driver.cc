@@ -198,12 +198,11 @@ void TrialDriver::Watch(double judged) {
   // law it replaced or u^0: that law runs again.
   const HarmGuardSettings& g = settings_.guard;
   window_[static_cast<size_t>(window_count_ % g.watch_trials)] = judged;
-  if (++window_count_ < g.watch_trials) return;
+  if (++window_count_ < g.watch_trials || !watching_) return;
   Runs recent;
   for (double c : window_) recent.Add(c);
   bool to_initial = false;
-  // u^0 is a law to go back to unless watch_initial or the user (SetInitialCandidate) withdrew it.
-  const bool initial = g.watch_initial && initial_candidate_ && initial_runs_.n > 0;
+  const bool initial = g.watch_initial && initial_runs_.n > 0;  // u^0 a law to go back to
   if (g.watch_ratio > 0) {
     // The median form: against the better of the replaced law's and u^0's records, by a ratio.
     const bool previous = previous_.valid && previous_runs_.n > 0;

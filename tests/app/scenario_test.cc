@@ -274,16 +274,16 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   EXPECT_EQ(c.driver.guard.watch_trials, 8);
   ExpectError(Fill(fmt, "watch_u0='no'"), {"watch_u0=\"no\"", "off or on"});
   ExpectError(Fill(fmt, "watch_ratio='-1'"), {"watch_ratio"});
-  // u^0 only while the robot is not heavier than the model by more than a ratio.
-  EXPECT_DOUBLE_EQ(c.watch_u0_max_mass, 0.0);
+  // The watch only while the robot is not heavier than the model by more than a ratio.
+  EXPECT_DOUBLE_EQ(c.watch_max_mass, 0.0);
   c = ControllerConfigFor(
       LoadScenario(Write(Fill(fmt, "verify_hops='3' watch_hops='8' verify_when='never' "
-                                   "watch_ratio='1.5' watch_u0_mass='1.05'"))),
+                                   "watch_ratio='1.5' watch_max_mass='1.05'"))),
       HopperParams());
-  EXPECT_DOUBLE_EQ(c.watch_u0_max_mass, 1.05);
+  EXPECT_DOUBLE_EQ(c.watch_max_mass, 1.05);
   EXPECT_TRUE(c.driver.guard.watch_initial);
-  ExpectError(Fill(fmt, "watch_u0_mass='0'"), {"watch_u0_mass"});
-  ExpectError(Fill(fmt, "watch_u0_mass='-1'"), {"watch_u0_mass", "-1"});
+  ExpectError(Fill(fmt, "watch_max_mass='0'"), {"watch_max_mass"});
+  ExpectError(Fill(fmt, "watch_max_mass='-1'"), {"watch_max_mass", "-1"});
 }
 
 TEST_F(ScenarioTest, PitchFeedbackExperiment) {

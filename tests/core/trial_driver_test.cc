@@ -897,19 +897,22 @@ TEST_F(TrialDriverTest, TheHarmGuardLeavesAKeptLawThatLaterMeasuresWorse) {
     EXPECT_EQ(unwatched.reverts(), 0);
     EXPECT_FALSE(unwatched.learner()->nominal_is_initial());
   }
-  // u^0 withdrawn (watch_initial = false, or by the user): the watch may go back to the law
-  // the kept one replaced, never to u^0, which runs in none of the trials.
-  for (bool by_user : {false, true}) {
+  // watch_initial = false: the watch may go back to the law the kept one replaced, never to
+  // u^0, which runs in none of the trials. Suspended by the user (SetWatching(false)): no
+  // challenge and no revert at all.
+  for (bool suspended : {false, true}) {
     settings.guard.watch_trials = 3;
-    settings.guard.watch_initial = by_user;
+    settings.guard.watch_initial = suspended;
     TrialDriver no_u0(p.problem, settings, fallback);
-    if (by_user) no_u0.SetInitialCandidate(false);
+    if (suspended) no_u0.SetWatching(false);
     for (int j = 0; j < i; ++j) no_u0.RunTrial(plant, lq.x0, &measured);
     ASSERT_FALSE(no_u0.learner()->nominal_is_initial()) << "premise: a law is kept";
     for (int j = 0; j < 20; ++j) {
       const TrialOutcome x = no_u0.RunTrial(flipped_plant, lq.x0, &measured);
-      EXPECT_FALSE(x.ran_fallback) << "trial " << x.trial << (by_user ? ", by the user" : "");
+      EXPECT_FALSE(x.ran_fallback) << "trial " << x.trial << (suspended ? ", suspended" : "");
+      if (suspended) EXPECT_FALSE(x.remeasured) << "trial " << x.trial << ", suspended";
     }
+    if (suspended) EXPECT_EQ(no_u0.reverts(), 0);
     EXPECT_FALSE(no_u0.learner()->nominal_is_initial());
   }
   // The revert follows 3 runs of u^0 (the challenge), which cost what u^0 costs.
@@ -940,15 +943,15 @@ TEST_F(TrialDriverTest, TheGuardThatDoesNotVerifyKeepsEveryAcceptedLawOnItsTrial
 // plant, and the kept law's next two trials, on the flipped one) has a median above
 // watch_ratio x u^0's cost, u^0 runs verify_trials times (the challenge) and the learner goes
 // back to it. With watch_initial = false the watch has no law to go back to (u^0 is excluded
-// and the kept law replaced none): the law stays. So it does while the user has withdrawn u^0
-// (SetInitialCandidate(false)), and once u^0 is a candidate again the watch goes back to it.
+// and the kept law replaced none): the law stays. So it does while the user has suspended the
+// watch (SetWatching(false)), and once it watches again it goes back to u^0.
 TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio) {
   const FlippedLq flipped;
   ModelPlant& flipped_plant = flipped.plant;
   Trajectory measured;
   flipped_plant.Run(lq.x0, fallback, &measured);
   const double u0_cost = EvaluateCost(p.problem, measured).total;  // u^0 = 0: B plays no part
-  for (int mode : {0, 1, 2}) {  // u^0 a candidate; watch_initial = false; withdrawn by the user
+  for (int mode : {0, 1, 2}) {  // u^0 a candidate; watch_initial = false; suspended by the user
     const bool initial = mode == 0;
     TrialDriverSettings settings = DriverSettings(Method::kAlg1);
     settings.guard.verify_trials = 3;
@@ -957,8 +960,8 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
     settings.guard.verify_accepted = false;
     settings.guard.watch_initial = mode != 1;
     TrialDriver driver(p.problem, settings, fallback);
-    EXPECT_TRUE(driver.initial_candidate());
-    if (mode == 2) driver.SetInitialCandidate(false);
+    EXPECT_TRUE(driver.watching());
+    if (mode == 2) driver.SetWatching(false);
     TrialOutcome accepted;
     for (int i = 0; i < 60 && driver.learner()->nominal_is_initial(); ++i) {
       accepted = driver.RunTrial(plant, lq.x0, &measured);
@@ -987,8 +990,8 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
       for (const TrialOutcome& x : o) EXPECT_FALSE(x.remeasured) << "trial " << x.trial;
       EXPECT_FALSE(driver.learner()->nominal_is_initial());
     }
-    if (mode == 2) {  // u^0 a candidate again: the watch's next look goes back to it
-      driver.SetInitialCandidate(true);
+    if (mode == 2) {  // watching again: the watch's next look goes back to u^0
+      driver.SetWatching(true);
       for (int j = 0; j < 12 && driver.reverts() == 0; ++j) {
         driver.RunTrial(flipped_plant, lq.x0, &measured);
       }

@@ -67,17 +67,13 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   ControllerConfig idle_latch;
   idle_latch.overspeed_latch = 0.05;
   rejected(idle_latch, "overspeed_latch = 0.05, expected 0 unless the reference moves");
-  ControllerConfig bad_u0_mass;
-  bad_u0_mass.watch_u0_max_mass = -1.0;
-  rejected(bad_u0_mass, "watch_u0_max_mass = -1, expected finite and >= 0");
-  // A mass limit for u^0 needs a watch that may go back to u^0.
-  ControllerConfig idle_u0_mass;
-  idle_u0_mass.watch_u0_max_mass = 1.05;
-  rejected(idle_u0_mass, "watch_u0_max_mass = 1.05, expected 0 unless the harm guard's watch");
-  idle_u0_mass.driver.guard.verify_trials = 3;
-  idle_u0_mass.driver.guard.watch_trials = 8;
-  idle_u0_mass.driver.guard.watch_initial = false;
-  rejected(idle_u0_mass, "watch_u0_max_mass = 1.05, expected 0 unless the harm guard's watch");
+  ControllerConfig bad_watch_mass;
+  bad_watch_mass.watch_max_mass = -1.0;
+  rejected(bad_watch_mass, "watch_max_mass = -1, expected finite and >= 0");
+  // A mass limit of the watch needs a watch.
+  ControllerConfig idle_watch_mass;
+  idle_watch_mass.watch_max_mass = 1.05;
+  rejected(idle_watch_mass, "watch_max_mass = 1.05, expected 0 unless the harm guard watches");
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
@@ -552,14 +548,14 @@ TEST(HopperControllerTest, TheOverspeedLatchHoldsTheGaitOnARobotThatRunsAway) {
   }
 }
 
-TEST(HopperControllerTest, UZeroIsWithdrawnFromTheWatchOnARobotHeavierThanTheModel) {
-  // watch_u0_max_mass: after each hop the identified mass decides whether the watch may go back
-  // to u^0. The 10 kg model's u^0 stays a candidate on the 8 kg robot and on the 12 kg one
-  // without a limit or with a limit above 1.2; a limit of 1.05 withdraws it there.
+TEST(HopperControllerTest, TheWatchIsSuspendedOnARobotHeavierThanTheModel) {
+  // watch_max_mass: after each hop the identified mass decides whether the watch may go back to
+  // an earlier law. The watch stays on the 8 kg robot, and on the 12 kg one without a limit or
+  // with a limit above 1.2; a limit of 1.05 suspends it there.
   struct Case {
     const char* mjcf;
     double limit;
-    bool candidate;
+    bool watching;
   };
   for (const Case& k : {Case{"hopper_m8.xml", 1.05, true}, Case{"hopper_m12.xml", 1.05, false},
                         Case{"hopper_m12.xml", 1.25, true}, Case{"hopper_m12.xml", 0.0, true}}) {
@@ -568,7 +564,7 @@ TEST(HopperControllerTest, UZeroIsWithdrawnFromTheWatchOnARobotHeavierThanTheMod
     config.driver.guard.watch_trials = 8;
     config.driver.guard.watch_ratio = 1.5;
     config.driver.guard.verify_accepted = false;
-    config.watch_u0_max_mass = k.limit;
+    config.watch_max_mass = k.limit;
     Robot rig(k.mjcf, config, false);
     ASSERT_TRUE(rig.ok());
     const std::vector<HopReport> reports = rig.Run(2, Host::kRunsOffline);
@@ -576,7 +572,7 @@ TEST(HopperControllerTest, UZeroIsWithdrawnFromTheWatchOnARobotHeavierThanTheMod
     const double ratio = reports.back().identified_mass / reports.back().model_mass;
     ASSERT_NEAR(ratio, k.mjcf == std::string("hopper_m8.xml") ? 0.8 : 1.2, 0.02)
         << "premise: the identified mass";
-    EXPECT_EQ(rig.c().driver().initial_candidate(), k.candidate)
+    EXPECT_EQ(rig.c().driver().watching(), k.watching)
         << k.mjcf << ", limit " << k.limit;
   }
 }
