@@ -54,26 +54,26 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
   bad_pitch.pitch_experiment.from_hop = -1;
   rejected(bad_pitch, "pitch_experiment.from_hop = -1, expected >= 0");
 
-  ControllerConfig bad_anchor;
-  bad_anchor.anchor_weight = 1.5;
-  rejected(bad_anchor, "anchor_weight = 1.5, expected in [0, 1]");
-  ControllerConfig bad_filter;
-  bad_filter.reference_filter = 0.0;
-  rejected(bad_filter, "reference_filter = 0, expected in (0, 1]");
-  ControllerConfig bad_latch;
-  bad_latch.overspeed_latch = -0.05;
-  rejected(bad_latch, "overspeed_latch = -0.05, expected finite and >= 0");
+  // One field of the default configuration set to `value`, and the error that names it.
+  const auto field_rejected = [&](double ControllerConfig::*field, double value,
+                                  const char* expected) {
+    ControllerConfig bad;
+    bad.*field = value;
+    rejected(bad, expected);
+  };
+  field_rejected(&ControllerConfig::anchor_weight, 1.5, "anchor_weight = 1.5, expected in [0, 1]");
+  field_rejected(&ControllerConfig::reference_filter, 0.0,
+                 "reference_filter = 0, expected in (0, 1]");
+  field_rejected(&ControllerConfig::overspeed_latch, -0.05,
+                 "overspeed_latch = -0.05, expected finite and >= 0");
   // A latch needs the moving reference it latches: with the gait's state alone it is an error.
-  ControllerConfig idle_latch;
-  idle_latch.overspeed_latch = 0.05;
-  rejected(idle_latch, "overspeed_latch = 0.05, expected 0 unless the reference moves");
-  ControllerConfig bad_watch_mass;
-  bad_watch_mass.watch_max_mass = -1.0;
-  rejected(bad_watch_mass, "watch_max_mass = -1, expected finite and >= 0");
+  field_rejected(&ControllerConfig::overspeed_latch, 0.05,
+                 "overspeed_latch = 0.05, expected 0 unless the reference moves");
+  field_rejected(&ControllerConfig::watch_max_mass, -1.0,
+                 "watch_max_mass = -1, expected finite and >= 0");
   // A mass limit of the watch needs a watch.
-  ControllerConfig idle_watch_mass;
-  idle_watch_mass.watch_max_mass = 1.05;
-  rejected(idle_watch_mass, "watch_max_mass = 1.05, expected 0 unless the harm guard watches");
+  field_rejected(&ControllerConfig::watch_max_mass, 1.05,
+                 "watch_max_mass = 1.05, expected 0 unless the harm guard watches");
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
