@@ -68,7 +68,9 @@ struct HarmGuardSettings {
   /// 0 (default): the watch compares the window's mean with `margin` standard errors. >= 1:
   /// the window's median judged cost above watch_ratio x the mean judged cost of the law to go
   /// back to makes that law run verify_trials times, and the kept law is abandoned when their
-  /// median is below the window's (a few pushed hops hardly move a median). Needs watch_trials.
+  /// median is below the window's and below that of every judged cost of the kept law since it
+  /// was kept (a few pushed hops hardly move a median, a pushed stretch moves the window and not
+  /// the record). Needs watch_trials.
   double watch_ratio = 0.0;
   /// false: the watch goes back only to the law the kept one replaced, never to u^0 (whose few
   /// fresh runs look good on a robot where it has no stable hop). Default true. A user can also
@@ -287,6 +289,7 @@ class TrialDriver {
   Runs initial_runs_, kept_runs_, previous_runs_;
   std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
   int window_count_ = 0;
+  std::vector<double> kept_record_;  // Watch: every judged cost of the kept law since it was kept
   std::vector<double> challenge_;  // watch_ratio: the challenge's judged costs (the window
                                    // stays as it was until the decision)
   PooledSpread pooled_;        // within-law deviations of every finished law's runs

@@ -91,6 +91,7 @@ void TrialDriver::Reset() {
   phase_ = Phase::kNone;
   window_.assign(static_cast<size_t>(settings_.guard.watch_trials), 0.0);
   window_count_ = 0;
+  kept_record_.clear();
   challenge_.clear();
   new_learner_sum_ = 0;
   initial_ = kept_ = previous_ = LearnerCheckpoint{};
@@ -197,6 +198,7 @@ void TrialDriver::Watch(double judged) {
   // The kept law's trials: a window of their last watch_trials judged costs. Worse than the
   // law it replaced or u^0: that law runs again.
   const HarmGuardSettings& g = settings_.guard;
+  kept_record_.push_back(judged);
   window_[static_cast<size_t>(window_count_ % g.watch_trials)] = judged;
   if (++window_count_ < g.watch_trials || !watching_) return;
   Runs recent;
@@ -265,10 +267,13 @@ TrialOutcome TrialDriver::Verify(const Trajectory& measured) {
     watch_ = false;
     other_runs_ = RunsOf(against);
   }
-  // The other law's fresh runs are in: the law on trial is abandoned when it is worse.
+  // The other law's fresh runs are in: the law on trial is abandoned when it is worse. The
+  // median form: worse than the window and than the kept law's whole record since it was kept
+  // (a pushed stretch moves the window, not the record).
   phase_ = Phase::kNone;
   const bool worse = watch_ && settings_.guard.watch_ratio > 0
-                         ? !challenge_.empty() && Median(window_) > Median(challenge_)
+                         ? !challenge_.empty() && Median(window_) > Median(challenge_) &&
+                               Median(kept_record_) > Median(challenge_)
                          : WorseThan(new_runs_, other_runs_);
   Pool(other_runs_);
   RunsOf(target_) = other_runs_;
@@ -301,6 +306,7 @@ void TrialDriver::Abandon(TrialOutcome& out) {
   out.reverted = true;
   pending_law_ = nullptr;
   window_count_ = 0;
+  kept_record_.clear();
   UseLearnedLaw(learner_->NextTrial());
 }
 
@@ -377,6 +383,7 @@ void TrialDriver::KeepNew() {
   kept_ = learner_->Save();
   kept_runs_ = new_runs_;
   window_count_ = 0;
+  kept_record_.clear();
   UseLearnedLaw(*pending_law_);
   pending_law_ = nullptr;
 }

@@ -30,6 +30,17 @@ TrialDriverSettings DriverSettings(Method method) {
   return s;
 }
 
+// Algorithm 1 with the median watch: accepted laws kept on their own trials, a window of 3,
+// watch_ratio 1.5, challenges of 3 runs.
+TrialDriverSettings MedianWatchSettings() {
+  TrialDriverSettings s = DriverSettings(Method::kAlg1);
+  s.guard.verify_trials = 3;
+  s.guard.watch_trials = 3;
+  s.guard.watch_ratio = 1.5;
+  s.guard.verify_accepted = false;
+  return s;
+}
+
 // u^0 = 0.3 with planned durations (1, 1): an initial law whose trial depends on the input
 // gain, so that the model's prediction differs from the plant's measurement.
 FunctionPolicy ConstantInputPolicy() {
@@ -953,11 +964,7 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
   const double u0_cost = EvaluateCost(p.problem, measured).total;  // u^0 = 0: B plays no part
   for (int mode : {0, 1, 2}) {  // u^0 a candidate; watch_initial = false; suspended by the user
     const bool initial = mode == 0;
-    TrialDriverSettings settings = DriverSettings(Method::kAlg1);
-    settings.guard.verify_trials = 3;
-    settings.guard.watch_trials = 3;
-    settings.guard.watch_ratio = 1.5;
-    settings.guard.verify_accepted = false;
+    TrialDriverSettings settings = MedianWatchSettings();
     settings.guard.watch_initial = mode != 1;
     TrialDriver driver(p.problem, settings, fallback);
     EXPECT_TRUE(driver.watching());
@@ -1007,12 +1014,7 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
 TEST_F(TrialDriverTest, TheMedianWatchKeepsALawWhoseChallengeMeasuresWorse) {
   const FlippedLq flipped;
   ModelPlant& flipped_plant = flipped.plant;
-  TrialDriverSettings settings = DriverSettings(Method::kAlg1);
-  settings.guard.verify_trials = 3;
-  settings.guard.watch_trials = 3;
-  settings.guard.watch_ratio = 1.5;
-  settings.guard.verify_accepted = false;
-  TrialDriver driver(p.problem, settings, fallback);
+  TrialDriver driver(p.problem, MedianWatchSettings(), fallback);
   Trajectory measured;
   TrialOutcome accepted;
   for (int i = 0; i < 60 && driver.learner()->nominal_is_initial(); ++i) {
@@ -1036,6 +1038,50 @@ TEST_F(TrialDriverTest, TheMedianWatchKeepsALawWhoseChallengeMeasuresWorse) {
   std::sort(window.begin(), window.end());
   std::sort(challenge.begin(), challenge.end());
   ASSERT_GT(challenge[1], window[1]) << "premise: u^0's challenge measures worse";
+  EXPECT_EQ(driver.reverts(), 0);
+  EXPECT_FALSE(driver.learner()->nominal_is_initial());
+}
+
+// A pushed stretch: the kept law has measured well for several trials, then two trials on the
+// flipped plant fill the window (its median above watch_ratio x the cost of the law to go back
+// to, here the law the kept one replaced), and the challenge runs on the plant as it was. The
+// challenge measures better than the window but worse than the kept law's record since it was
+// kept: the law stays (the window alone would revert).
+TEST_F(TrialDriverTest, TheMedianWatchKeepsALawWhoseRecordBeatsTheChallenge) {
+  const FlippedLq flipped;
+  ModelPlant& flipped_plant = flipped.plant;
+  TrialDriver driver(p.problem, MedianWatchSettings(), fallback);
+  Trajectory measured;
+  // The kept law's record: trials until five in a row keep the same law.
+  std::vector<double> record;
+  for (int i = 0; i < 300 && record.size() < 5; ++i) {
+    const TrialOutcome o = driver.RunTrial(plant, lq.x0, &measured);
+    if (driver.learner()->nominal_is_initial()) continue;
+    if (o.accepted && o.learned) record.clear();
+    record.push_back(o.judged_cost);
+  }
+  ASSERT_EQ(record.size(), 5u) << "premise: a law kept for five trials";
+  std::vector<double> window = {record[3], record[4]};
+  std::vector<double> challenge;
+  for (int j = 0; j < 12 && challenge.size() < 3; ++j) {
+    const bool in_challenge = driver.verifying() > 0;
+    const TrialOutcome o = driver.RunTrial(in_challenge ? plant : flipped_plant, lq.x0, &measured);
+    if (in_challenge) {
+      ASSERT_TRUE(o.remeasured) << "trial " << o.trial;
+      challenge.push_back(o.judged_cost);
+    } else {
+      window.push_back(o.judged_cost);
+      record.push_back(o.judged_cost);
+    }
+  }
+  ASSERT_EQ(challenge.size(), 3u) << "premise: the window's median starts a challenge";
+  window.erase(window.begin(), window.end() - 3);
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.size() % 2 == 1 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+  };
+  ASSERT_GT(median(window), median(challenge)) << "premise: the window alone would revert";
+  ASSERT_LT(median(record), median(challenge)) << "premise: the record beats u^0";
   EXPECT_EQ(driver.reverts(), 0);
   EXPECT_FALSE(driver.learner()->nominal_is_initial());
 }
