@@ -71,10 +71,6 @@ void ValidateConfig(const ControllerConfig& c) {
   if (!(c.watch_max_mass >= 0.0) || !std::isfinite(c.watch_max_mass)) {
     fail("watch_max_mass", c.watch_max_mass, "finite and >= 0");
   }
-  if (c.watch_max_mass > 0.0 && c.driver.guard.watch_trials == 0) {
-    fail("watch_max_mass", c.watch_max_mass,
-         "0 unless the harm guard watches (driver.guard.watch_trials >= 2)");
-  }
   if (c.overspeed_latch > 0.0 &&
       !(c.anchor_reference && c.anchor_weight < 1.0 && c.reference_filter < 1.0)) {
     fail("overspeed_latch", c.overspeed_latch,
@@ -701,7 +697,7 @@ void HopperController::EndHop(double t, const FlightState14& x) {
   r.identified_mass = estimate.mass;
   r.model_mass = model_.params().M;
   if (config_.watch_max_mass > 0) {
-    watching_ = !(estimate.mass > config_.watch_max_mass * model_.params().M);
+    watching_ = !(estimate.mass > config_.watch_max_mass * config_.model.M);
   }
   r.identified_terms = terms;
   const HopperParams& model = model_.params();

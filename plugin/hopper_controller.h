@@ -146,9 +146,10 @@ struct ControllerConfig {
   PitchFeedbackExperiment pitch_experiment;  ///< off by default
   IdentificationSettings identification;     ///< mass estimate always; acting on it off
   /// > 0: the harm guard's watch goes back to an earlier law only while the identified mass
-  /// (every hop, whether or not identification acts) is at most this x the model's M
-  /// (TrialDriver::SetWatching); 0 (default) = always. docs/hopper.md.
-  double watch_max_mass = 0.0;
+  /// (every hop, whether or not identification acts) is at most this x `model.M`, the given
+  /// model's (TrialDriver::SetWatching); 0 = always; no effect without driver.guard.watch_trials.
+  /// Default 1.05. docs/hopper.md.
+  double watch_max_mass = 1.05;
   /// Directory of stored u^0 laws (plugin/law_cache.h): Create loads u^0 from it when the model
   /// solve's inputs and binaries match, else solves and stores. "" (default) = always solve.
   std::string law_cache;

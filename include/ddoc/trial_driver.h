@@ -40,8 +40,8 @@ struct HarmGuardSettings {
   /// Default 2.
   double margin = 2.0;
   /// The watch: the last this many judged costs of a kept law's learning trials are compared
-  /// with the law it replaced and u^0; 0 = no watch (default: on the hopper a push made it go
-  /// back to a law that then fell, docs/experiments.md, "The harm guard"), else >= 2.
+  /// with the law it replaced and u^0; 0 = no watch (default), else >= 2. The hopper's default
+  /// watches 8 in the median form (watch_ratio; HopperTrialSettings).
   int watch_trials = 0;
   /// true: a kept law's I^i becomes the mean learner cost of its re-runs instead of the accepted
   /// trial's own cost, which its selection biased low. Default false (on the hopper's mass map

@@ -126,6 +126,16 @@ plugin::ControllerConfig ControllerConfigFor(const Scenario& s, const HopperPara
   if (l.watch_ratio) config.driver.guard.watch_ratio = *l.watch_ratio;
   if (l.watch_u0) config.driver.guard.watch_initial = *l.watch_u0;
   if (l.watch_max_mass) config.watch_max_mass = *l.watch_max_mass;
+  if (l.verify_hops && *l.verify_hops == 0) {
+    // verify_hops="0" turns the harm guard off, its watch with it (unless set here as well).
+    if (!l.watch_hops) config.driver.guard.watch_trials = 0;
+    if (!l.watch_ratio) config.driver.guard.watch_ratio = 0.0;
+    if (!l.verify_when_never) config.driver.guard.verify_accepted = true;
+  }
+  if (l.watch_max_mass && *l.watch_max_mass > 0 && config.driver.guard.watch_trials == 0) {
+    throw ScenarioError("<learning watch_max_mass> > 0 needs the harm guard's watch "
+                        "(watch_hops >= 2), which this scenario turns off");
+  }
   if (l.curvature_scale_min) learner.curvature_scale_min = *l.curvature_scale_min;
   if (l.blend_feedback) learner.blend_feedback = *l.blend_feedback;
   if (l.blend_feedforward) learner.blend_feedforward = *l.blend_feedforward;

@@ -112,7 +112,7 @@ const std::vector<ElementSpec>& Elements() {
         Number("restart_alpha", {0.0, 1.0, true, false}), Integer("verify_hops", 0),
         Number("verify_margin", kNonNegative), Text("verify_debias"), Text("verify_interleave"),
         Text("verify_log"), Text("verify_when"), Integer("watch_hops", 0),
-        Number("watch_ratio", kNonNegative), Text("watch_u0"), Number("watch_max_mass", kPositive),
+        Number("watch_ratio", kNonNegative), Text("watch_u0"), Number("watch_max_mass", kNonNegative),
         Number("curvature_scale_min", {0.0, 1.0, true, false})}},
       {"experiment", false,
        {Number("flight_pitch_feedback", Closed(0, 1)), Integer("from_hop", 1)}},

@@ -76,7 +76,7 @@ struct LearningOverrides {
   std::optional<bool> verify_when_never;  // verify_when="never": !HarmGuardSettings::verify_accepted
   std::optional<double> watch_ratio;    // HarmGuardSettings::watch_ratio, 0 or >= 1
   std::optional<bool> watch_u0;         // "on"/"off": HarmGuardSettings::watch_initial
-  std::optional<double> watch_max_mass;  // ControllerConfig::watch_max_mass, > 0
+  std::optional<double> watch_max_mass;  // ControllerConfig::watch_max_mass, >= 0
   std::optional<double> curvature_scale_min;  // LearnerSettings::curvature_scale_min, (0, 1]
   std::optional<bool> blend_feedback;   // "on"/"off": LearnerSettings::blend_feedback
   std::optional<bool> blend_feedforward;  // "on"/"off": LearnerSettings::blend_feedforward

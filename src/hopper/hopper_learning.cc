@@ -55,10 +55,20 @@ TrialDriverSettings HopperTrialSettings(Preset preset) {
   TrialDriverSettings s;
   s.method = Method::kAlg1;
   s.warmup_trials = 1;
-  s.learner = preset == Preset::kPaper ? HopperPaperLearnerSettings() : HopperLearnerSettings();
-  // The harm guard stays off (guard.verify_trials = 0): with 3 re-runs it keeps no harm on the
-  // 80 % hip motor and gains a survival on the mass map, but loses 31 of the 216 pushes the
-  // 12 kg robot survives (docs/experiments.md, "The harm guard"); <learning verify_hops="3"/>.
+  if (preset == Preset::kPaper) {
+    s.learner = HopperPaperLearnerSettings();  // no harm guard: Algorithm 1 as printed
+    return s;
+  }
+  s.learner = HopperLearnerSettings();
+  // The harm guard's median watch (docs/engine.md, "Never keeping harm"): accepted laws are kept
+  // on their own trial; a kept law whose last 8 judged costs have a median above 1.5 x the mean
+  // of the law it replaced (or u^0's) lets that law run 3 times, and is abandoned when their
+  // median beats the window's and the kept law's record (docs/experiments.md, "The median watch
+  // becomes the default"); ControllerConfig::watch_max_mass suspends it on heavier robots.
+  s.guard.verify_trials = 3;
+  s.guard.watch_trials = 8;
+  s.guard.verify_accepted = false;
+  s.guard.watch_ratio = 1.5;
   return s;
 }
 

@@ -259,30 +259,48 @@ TEST_F(ScenarioTest, LearningRemeasureNoiseMarginAndHopsPerTrial) {
   ExpectError(Fill(fmt, "verify_interleave='2'"), {"verify_interleave=\"2\"", "off or on"});
   ExpectError(Fill(fmt, "verify_when='sometimes'"),
               {"verify_when=\"sometimes\"", "always, worse or never"});
-  // The median watch: accepted laws kept on their own trials, a ratio, u^0 excluded.
-  EXPECT_TRUE(c.driver.guard.verify_accepted);
-  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 0.0);
-  EXPECT_TRUE(c.driver.guard.watch_initial);
-  c = ControllerConfigFor(
-      LoadScenario(Write(Fill(fmt, "verify_hops='3' watch_hops='8' verify_when='never' "
-                                   "watch_ratio='1.5' watch_u0='off'"))),
-      HopperParams());
-  EXPECT_FALSE(c.driver.guard.verify_accepted);
-  EXPECT_FALSE(c.driver.guard.only_when_worse);
-  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 1.5);
-  EXPECT_FALSE(c.driver.guard.watch_initial);
+  // The default's median watch (HopperTrialSettings): accepted laws kept on their own trial, the
+  // last 8 judged costs watched against 1.5 x the law to go back to, u^0 included, and only on a
+  // robot no heavier than 1.05 x the given model's M.
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, ""))), HopperParams());
+  EXPECT_EQ(c.driver.guard.verify_trials, 3);
   EXPECT_EQ(c.driver.guard.watch_trials, 8);
+  EXPECT_FALSE(c.driver.guard.verify_accepted);
+  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 1.5);
+  EXPECT_TRUE(c.driver.guard.watch_initial);
+  EXPECT_DOUBLE_EQ(c.watch_max_mass, 1.05);
+  // verify_hops='0' turns the guard off, its watch with it; the paper preset has none.
+  for (const char* off : {"verify_hops='0'", "preset='paper'"}) {
+    c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, off))), HopperParams());
+    EXPECT_EQ(c.driver.guard.verify_trials, 0) << off;
+    EXPECT_EQ(c.driver.guard.watch_trials, 0) << off;
+    EXPECT_TRUE(c.driver.guard.verify_accepted) << off;
+    EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 0.0) << off;
+  }
+  c = ControllerConfigFor(
+      LoadScenario(Write(Fill(fmt, "watch_hops='6' verify_when='always' watch_ratio='2' "
+                                   "watch_u0='off'"))),
+      HopperParams());
+  EXPECT_TRUE(c.driver.guard.verify_accepted);
+  EXPECT_FALSE(c.driver.guard.only_when_worse);
+  EXPECT_DOUBLE_EQ(c.driver.guard.watch_ratio, 2.0);
+  EXPECT_FALSE(c.driver.guard.watch_initial);
+  EXPECT_EQ(c.driver.guard.watch_trials, 6);
   ExpectError(Fill(fmt, "watch_u0='no'"), {"watch_u0=\"no\"", "off or on"});
   ExpectError(Fill(fmt, "watch_ratio='-1'"), {"watch_ratio"});
-  // The watch only while the robot is not heavier than the model by more than a ratio.
-  EXPECT_DOUBLE_EQ(c.watch_max_mass, 0.0);
-  c = ControllerConfigFor(
-      LoadScenario(Write(Fill(fmt, "verify_hops='3' watch_hops='8' verify_when='never' "
-                                   "watch_ratio='1.5' watch_max_mass='1.05'"))),
-      HopperParams());
-  EXPECT_DOUBLE_EQ(c.watch_max_mass, 1.05);
-  EXPECT_TRUE(c.driver.guard.watch_initial);
-  ExpectError(Fill(fmt, "watch_max_mass='0'"), {"watch_max_mass"});
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "watch_max_mass='1.2'"))), HopperParams());
+  EXPECT_DOUBLE_EQ(c.watch_max_mass, 1.2);
+  // A mass limit of the watch in a scenario without a watch names both.
+  try {
+    ControllerConfigFor(LoadScenario(Write(Fill(fmt, "verify_hops='0' watch_max_mass='1.2'"))),
+                        HopperParams());
+    ADD_FAILURE() << "no error for watch_max_mass without a watch";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("watch_max_mass"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("watch_hops"), std::string::npos) << e.what();
+  }
+  c = ControllerConfigFor(LoadScenario(Write(Fill(fmt, "watch_max_mass='0'"))), HopperParams());
+  EXPECT_DOUBLE_EQ(c.watch_max_mass, 0.0);  // 0: the watch on every robot
   ExpectError(Fill(fmt, "watch_max_mass='-1'"), {"watch_max_mass", "-1"});
 }
 

@@ -71,9 +71,6 @@ TEST(HopperControllerTest, CreateFailsClearlyOnMisconfiguration) {
                  "overspeed_latch = 0.05, expected 0 unless the reference moves");
   field_rejected(&ControllerConfig::watch_max_mass, -1.0,
                  "watch_max_mass = -1, expected finite and >= 0");
-  // A mass limit of the watch needs a watch.
-  field_rejected(&ControllerConfig::watch_max_mass, 1.05,
-                 "watch_max_mass = 1.05, expected 0 unless the harm guard watches");
 
   ControllerConfig bad_latency;
   bad_latency.offline_latency = 0.06;  // not below the shortest flight (0.05 s)
@@ -550,30 +547,37 @@ TEST(HopperControllerTest, TheOverspeedLatchHoldsTheGaitOnARobotThatRunsAway) {
 
 TEST(HopperControllerTest, TheWatchIsSuspendedOnARobotHeavierThanTheModel) {
   // watch_max_mass: after each hop the identified mass decides whether the watch may go back to
-  // an earlier law. The watch stays on the 8 kg robot, and on the 12 kg one without a limit or
-  // with a limit above 1.2; a limit of 1.05 suspends it there.
+  // an earlier law. With the default (1.05) the watch stays on the 8 kg robot and is suspended
+  // on the 12 kg one; it stays there without a limit or with a limit above 1.2. The limit is on
+  // the given model's M: a model that identification re-solved on 12 kg does not lift it.
   struct Case {
     const char* mjcf;
     double limit;
+    bool identify;
     bool watching;
   };
-  for (const Case& k : {Case{"hopper_m8.xml", 1.05, true}, Case{"hopper_m12.xml", 1.05, false},
-                        Case{"hopper_m12.xml", 1.25, true}, Case{"hopper_m12.xml", 0.0, true}}) {
+  for (const Case& k : {Case{"hopper_m8.xml", 1.05, false, true},
+                        Case{"hopper_m12.xml", 1.05, false, false},
+                        Case{"hopper_m12.xml", 1.25, false, true},
+                        Case{"hopper_m12.xml", 0.0, false, true},
+                        Case{"hopper_m12.xml", 1.05, true, false}}) {
     ControllerConfig config;
-    config.driver.guard.verify_trials = 3;
-    config.driver.guard.watch_trials = 8;
-    config.driver.guard.watch_ratio = 1.5;
-    config.driver.guard.verify_accepted = false;
+    ASSERT_GT(config.driver.guard.watch_trials, 0) << "premise: the default watches";
+    ASSERT_EQ(config.watch_max_mass, 1.05) << "premise: the default limit";
     config.watch_max_mass = k.limit;
+    config.identification.mass = k.identify;
     Robot rig(k.mjcf, config, false);
     ASSERT_TRUE(rig.ok());
-    const std::vector<HopReport> reports = rig.Run(2, Host::kRunsOffline);
-    ASSERT_EQ(reports.size(), 2u);
-    const double ratio = reports.back().identified_mass / reports.back().model_mass;
+    const std::vector<HopReport> reports = rig.Run(3, Host::kRunsOffline);
+    ASSERT_EQ(reports.size(), 3u);
+    const double ratio = reports.back().identified_mass / config.model.M;
     ASSERT_NEAR(ratio, k.mjcf == std::string("hopper_m8.xml") ? 0.8 : 1.2, 0.02)
         << "premise: the identified mass";
+    ASSERT_NEAR(reports.back().model_mass, k.identify ? reports.back().identified_mass : 10.0,
+                0.02 * 12.0)
+        << "premise: the model identification re-solved on, or the given one";
     EXPECT_EQ(rig.c().driver().watching(), k.watching)
-        << k.mjcf << ", limit " << k.limit;
+        << k.mjcf << ", limit " << k.limit << (k.identify ? ", identified" : "");
   }
 }
 
@@ -613,7 +617,7 @@ TEST(HopperControllerTest, ReportsCarryWhatTheAcceptanceTestCompared) {
   // The harm guard's re-runs of an accepted law (remeasured) are not judged: they come in
   // blocks of verify_trials after an accepted hop, predict nothing, and leave the learner as it
   // was, so the identities below relate each judged hop to the last judged one before it.
-  const int reruns = config.driver.guard.verify_trials;
+  const int reruns = config.driver.guard.verify_accepted ? config.driver.guard.verify_trials : 0;
   int accepted = 0, rejected = 0, rerun_left = 0;
   size_t last_judged = 0;
   for (size_t h = 0; h < reports.size(); ++h) {

@@ -42,7 +42,8 @@ LearnerSettings HopperPaperLearnerSettings();
 
 /// The trial driver on the hopper: Algorithm 1 with one "Initialize" hop of u^0 (as printed),
 /// learner = HopperLearnerSettings() (kDefault) or HopperPaperLearnerSettings() (kPaper); the
-/// harm guard off (an option: docs/engine.md, "Never keeping harm").
+/// harm guard's median watch with kDefault (verify_trials 3, watch_trials 8, verify_accepted
+/// false, watch_ratio 1.5; docs/engine.md, "Never keeping harm"), off with kPaper.
 TrialDriverSettings HopperTrialSettings(Preset preset = Preset::kDefault);
 
 /// Duration bounds of the hopper's modes (Bounds::duration_min/max), s.
