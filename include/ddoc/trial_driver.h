@@ -29,7 +29,8 @@ enum class Method {
 
 /// The harm guard of TrialDriver (docs/engine.md, "Never keeping harm"): each accepted law is
 /// re-run before it is kept, and one that measures worse than the law it replaced, or than u^0,
-/// is abandoned for the better of the two.
+/// is abandoned for the better of the two. A default-constructed HarmGuardSettings is the guard
+/// off; the hopper's default turns it on (HopperTrialSettings).
 struct HarmGuardSettings {
   /// Re-runs of each accepted law; their judged costs (the reported cost, TrialDriver::
   /// CostReference with for_learner = false) are compared with the kept law's and u^0's. 0 = off

@@ -46,7 +46,8 @@ TrialDriver::TrialDriver(const Problem& problem, const TrialDriverSettings& sett
     throw InvalidArgument("TrialDriverSettings: guard.watch_ratio needs guard.watch_trials >= 2 "
                           "and guard.verify_trials >= 2 (watch_trials = " +
                           std::to_string(g.watch_trials) + ", verify_trials = " +
-                          std::to_string(g.verify_trials) + ")");
+                          std::to_string(g.verify_trials) +
+                          "); to turn the whole guard off, assign guard = HarmGuardSettings{}");
   }
   if (!g.verify_accepted && (g.only_when_worse || g.interleave)) {
     throw InvalidArgument("TrialDriverSettings: guard.verify_accepted = false excludes "

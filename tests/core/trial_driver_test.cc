@@ -583,7 +583,10 @@ TEST_F(TrialDriverTest, BadGuardSettingsAreNamed) {
   ratio.guard.watch_trials = 0;
   ExpectThrowsWith([&] { TrialDriver d(p.problem, ratio, fallback); },
                    "guard.watch_ratio needs guard.watch_trials >= 2 and guard.verify_trials >= 2 "
-                   "(watch_trials = 0, verify_trials = 3)");
+                   "(watch_trials = 0, verify_trials = 3); to turn the whole guard off, assign "
+                   "guard = HarmGuardSettings{}");
+  ratio.guard = HarmGuardSettings{};  // what the message says turns it off
+  EXPECT_NO_THROW({ TrialDriver d(p.problem, ratio, fallback); });
   TrialDriverSettings keep = DriverSettings(Method::kAlg1);
   keep.guard.verify_trials = 3;
   keep.guard.verify_accepted = false;
