@@ -119,6 +119,37 @@ class GridTest(unittest.TestCase):
         self.assertTrue(math.isnan(hip["mass"]) and math.isnan(hip["j_body"]))
         self.assertEqual(hip["b_leg"], 0.0)
 
+    def test_the_heldout_robots_are_seeded_draws_within_their_ranges(self):
+        # Issue 45: robots in no file, drawn from a seed; the same seed draws the same robots (the
+        # manifest keeps the draws), another seed others; every key within its range.
+        g = self.grid("--maps", "heldout", "--heldout-robots", "40", "--heldout-seed", "7")
+        again = self.grid("--maps", "heldout", "--heldout-robots", "40", "--heldout-seed", "7")
+        other = self.grid("--maps", "heldout", "--heldout-robots", "40", "--heldout-seed", "8")
+        self.assertEqual(g["heldout"]["draws"], again["heldout"]["draws"])
+        self.assertNotEqual(g["heldout"]["draws"], other["heldout"]["draws"])
+        self.assertEqual(g["heldout"]["draws"][:10],
+                         self.grid("--maps", "heldout", "--heldout-robots", "10",
+                                   "--heldout-seed", "7")["heldout"]["draws"])
+        ranges = {k: (lo, hi) for k, lo, hi in rm.HELDOUT_ALWAYS}
+        ranges.update({k: (lo, hi) for k, lo, hi, _ in rm.HELDOUT_SOMETIMES})
+        seen = set()
+        for draw in g["heldout"]["draws"]:
+            values = dict(kv.split("=") for kv in draw["variant"].split(","))
+            self.assertEqual(list(values)[:2], ["mass", "c_d"])
+            for key, text in values.items():
+                lo, hi = ranges[key]
+                self.assertTrue(lo <= float(text) <= hi, f"{key}={text} not in [{lo}, {hi}]")
+            seen.update(values)
+            self.assertIn(draw["speed"], rm.HELDOUT_SPEEDS)
+        self.assertEqual(seen, set(ranges))  # 40 draws reach every key
+        cases = rm.cases(g)
+        self.assertEqual(len(cases), 40 * 3)
+        self.assertEqual([n for _, n, _ in cases[:4]],
+                         ["heldout_s7_r000_alg1", "heldout_s7_r000_ocfb", "heldout_s7_r000_mrl",
+                          "heldout_s7_r001_alg1"])
+        self.assertEqual(cases[3][2]["variant"], g["heldout"]["draws"][1]["variant"])
+        self.assertNotIn("heldout", self.grid())  # not in the default maps
+
     def test_identification_is_an_axis_before_the_method(self):
         # Left at its default (off), the cases, their order and the manifest's grid are those of
         # issue 19; `on` adds a case with _id_ before each method's, next to its `off` twin.
@@ -278,6 +309,38 @@ class SummaryTest(TempDirTest):
         for method in ("alg1", "ocfb", "mrl"):
             self.assertTrue(os.path.isfile(os.path.join(self.tmp, "heatmaps",
                                                         f"unmodelled_{method}.png")))
+
+    def test_heldout_counts(self):
+        # Three robots: alg1 survives all, ocfb robots 0 and 1, mrl robot 0. alg1 / ocfb: 1.0 /
+        # 1.25 = 0.8 and 3.0 / 1.5 = 2.0 (geometric mean 1.265, worst 2.00x, robot 001, one of
+        # two <= 1.10x); mrl / ocfb: 1.5 / 1.25 = 1.2; mrl falls on robot 1 where ocfb survives.
+        grid = rm.grid_from_args(rm.run_parser().parse_args(
+            ["--maps", "heldout", "--heldout-robots", "3", "--heldout-seed", "3"]))
+        costs = {"000": (1.0, 1.25, 1.5), "001": (3.0, 1.5, None), "002": (2.0, None, None)}
+        rows = {}
+        for _, name, keys in rm.cases(grid):
+            cost = dict(zip(rm.METHODS, costs[keys["robot"]]))[keys["method"]]
+            rows[name] = fake_row("heldout", name, keys["method"], cost, 0.1, 12,
+                                  robot=keys["robot"], variant=keys["variant"],
+                                  speed=rm.dr.label(keys["speed"]), accepted="2",
+                                  identification="off")
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            text = f.read()
+        self.assertIn("| alg1 | 3/3 | 2 |", text)
+        self.assertIn("| ocfb | 2/3 | 2 |", text)
+        self.assertIn("| mrl | 1/3 | 2 |", text)
+        self.assertIn("alg1 vs OC-FB: both survive 2; alg1's last-10 cost <= OC-FB's in 1, "
+                      "<= 1.10x in 1;", text)
+        self.assertIn("geometric mean of the ratio 1.265, worst 2.00x (robot 001); falls where "
+                      "OC-FB survives 0, survives where OC-FB falls 1.", text)
+        self.assertIn("mrl vs OC-FB: both survive 1; mrl's last-10 cost <= OC-FB's in 0, "
+                      "<= 1.10x in 0;", text)
+        self.assertIn("falls where OC-FB survives 1, survives where OC-FB falls 0.", text)
+        draw = grid["heldout"]["draws"][1]
+        self.assertIn(f"| 001 | {rm.dr.label(draw['speed'])} | `{draw['variant']}` | 100, 3 | "
+                      "100, 1.5 | fell @12 |", text)
 
     def test_a_map_written_before_the_identification_column_reads_as_off(self):
         grid = self.grid()
@@ -770,6 +833,27 @@ class RealRunTest(TempDirTest):
         run = os.path.join(out, "runs", "unmod_m8_b_leg2_ocfb")
         with open(os.path.join(run, "summary.json")) as f:
             self.assertIn("hopper_m8.xml with b_leg=2", json.load(f)["robot"])
+
+    def test_one_heldout_case(self):
+        # The drawn robot reaches the run: summary.json names hopper_m8.xml with the variant, and
+        # the gait speed is the draw's.
+        out = os.path.join(self.tmp, "map")
+        r = run_tool("robustness_map", "--maps", "heldout", "--heldout-robots", "1",
+                     "--methods", "ocfb", "--hops", "3", "--hopper", HOPPER, "--out", out,
+                     "--jobs", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        [row] = csv_rows(os.path.join(out, "heldout_map.csv"))
+        draw = rm.heldout_robots(1, 1)[0]
+        self.assertEqual((row["case"], row["variant"], row["exit"], row["hops"]),
+                         ("heldout_s1_r000_ocfb", draw["variant"], "0", "3"))
+        run = os.path.join(out, "runs", row["case"])
+        with open(os.path.join(run, "summary.json")) as f:
+            robot = json.load(f)["robot"]
+        self.assertIn("hopper_m8.xml with ", robot)
+        for kv in draw["variant"].split(","):  # ddoc-hopper names the keys in its own order
+            self.assertIn(kv, robot.split(" with ")[1].split(","))
+        with open(os.path.join(out, "scenarios", row["case"] + ".xml")) as f:
+            self.assertIn(f'<gait speed="{draw["speed"]!r}"/>', f.read())
 
     def test_learning_attributes_reach_every_run(self):
         # --learning (experiments): the <learning> element of every generated scenario, read by
