@@ -384,10 +384,15 @@ void StartController(LoadedRun* run) {
   std::string error;
   run->controller = plugin::HopperController::Create(run->model.get(), run->config, &error);
   if (!run->controller) {
-    // A bad --offline-latency or a gait the search cannot find is bad input; anything else
-    // failed inside the controller.
+    // A bad --offline-latency, a gait the search cannot find, or settings the controller's
+    // config, the learner or the trial driver refuse (a scenario's <learning> attributes that
+    // are each in range but not together, e.g. alpha_min >= alpha_initial) are bad input;
+    // anything else failed inside the controller.
     const bool input = error.find("offline_latency") != std::string::npos ||
-                       error.find("FindNominalGait") != std::string::npos;
+                       error.find("FindNominalGait") != std::string::npos ||
+                       error.find("Create: config.") != std::string::npos ||
+                       error.find("LearnerSettings: ") != std::string::npos ||
+                       error.find("TrialDriverSettings: ") != std::string::npos;
     throw RunError(input ? kExitBadInput : kExitError, error);
   }
   run->controller->Reset(run->model.get(), run->data.get());

@@ -100,8 +100,18 @@ TEST_F(CliTest, BadInputExitsTwoWithANamedError) {
   std::ofstream(dir_ / "typo.xml") << "<ddoc_scenario>\n<robot mjcf='" << DDOC_MODELS_DIR
                                    << "/hopper_m8.xml'/>\n<learning cyclic='0.99'/>\n"
                                    << "</ddoc_scenario>\n";
+  // Each attribute in range, together refused by the learner / the trial driver (issue 45).
+  std::ofstream(dir_ / "alpha.xml") << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR
+                                    << "/hopper_m8.xml'/><learning alpha_initial='1e-6'/>"
+                                    << "</ddoc_scenario>\n";
+  std::ofstream(dir_ / "guard.xml") << "<ddoc_scenario><robot mjcf='" << DDOC_MODELS_DIR
+                                    << "/hopper_m8.xml'/><learning verify_hops='3' "
+                                    << "verify_when='worse' verify_interleave='on'/>"
+                                    << "</ddoc_scenario>\n";
   const Case cases[] = {
       {"", "scenario is required"},
+      {Out("alpha.xml"), "LearnerSettings: alpha_min must be in [0, alpha_initial)"},
+      {Out("guard.xml"), "TrialDriverSettings: guard."},
       {Out("missing.xml"), "does not exist"},
       {Out("broken.xml"), "malformed XML"},
       {good + " --method ppo", "unknown method \"ppo\""},
