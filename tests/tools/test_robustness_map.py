@@ -199,6 +199,14 @@ def fake_row(map_kind, name, method, cost, sd, fall_hop, **keys):
 class SummaryTest(TempDirTest):
     """summary.md of a hand-written map directory: counts checked by hand."""
 
+    def summary_of(self, grid, rows):
+        """Writes `rows` (case name -> CSV row) as the map of `grid`, reports it, returns
+        summary.md."""
+        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
+        rm.report(self.tmp)
+        with open(os.path.join(self.tmp, "summary.md")) as f:
+            return f.read()
+
     def test_counts(self):
         grid = self.grid()
         rows = {}
@@ -215,10 +223,7 @@ class SummaryTest(TempDirTest):
             cost = {"alg1": a, "ocfb": o, "mrl": None}[keys["method"]]
             rows[name] = fake_row("mass", name, keys["method"], cost, sds[m], 7,
                                   mass=str(m), c_d="0", speed="0.5", learner_status="running")
-        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
-        rm.report(self.tmp)
-        with open(os.path.join(self.tmp, "summary.md")) as f:
-            text = f.read()
+        text = self.summary_of(grid, rows)
         self.assertIn("| alg1 | 4/4 |", text)
         self.assertIn("| ocfb | 3/4 |", text)
         self.assertIn("| mrl | 0/4 |", text)
@@ -294,10 +299,7 @@ class SummaryTest(TempDirTest):
             rows[name] = fake_row("unmodelled", name, keys["method"], cost, 0.1, 9,
                                   robot_mass="8", kind=keys["kind"],
                                   level=rm.dr.label(keys["level"]), identification="off")
-        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
-        rm.report(self.tmp)
-        with open(os.path.join(self.tmp, "summary.md")) as f:
-            text = f.read()
+        text = self.summary_of(grid, rows)
         self.assertIn("| 8 | b_leg | 1, 4 | 2/2 | 1/2 | 0/2 |", text)
         self.assertIn("| 8 | gain | 0.9 | 1/1 | 1/1 | 0/1 |", text)
         self.assertIn("| all | | | 3/3 | 2/3 | 0/3 |", text)
@@ -324,10 +326,7 @@ class SummaryTest(TempDirTest):
                                   robot=keys["robot"], variant=keys["variant"],
                                   speed=rm.dr.label(keys["speed"]), accepted="2",
                                   identification="off")
-        rm.write_outputs(self.tmp, grid, (0, 1), set(rows), rows)
-        rm.report(self.tmp)
-        with open(os.path.join(self.tmp, "summary.md")) as f:
-            text = f.read()
+        text = self.summary_of(grid, rows)
         self.assertIn("| alg1 | 3/3 | 2 |", text)
         self.assertIn("| ocfb | 2/3 | 2 |", text)
         self.assertIn("| mrl | 1/3 | 2 |", text)
