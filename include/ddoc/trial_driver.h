@@ -288,6 +288,9 @@ class TrialDriver {
   Runs other_runs_;            // the challenge's fresh runs
   LearnerCheckpoint initial_, kept_, previous_;  // u^0's nominal, the kept one, the one it replaced
   Runs initial_runs_, kept_runs_, previous_runs_;
+  // u^0's runs before "Initialize" (warm-up, settling after a re-solve): pooled into the spread
+  // at "Initialize", but not u^0's record, which starts with the Initialize hop.
+  Runs warmup_runs_;
   std::vector<double> window_;  // Watch: the kept law's last judged costs (a ring)
   int window_count_ = 0;
   std::vector<double> kept_record_;  // Watch: every judged cost of the kept law since it was kept

@@ -88,7 +88,7 @@ void TrialDriver::Reset() {
   runs_ = 0;
   run_cost_sum_ = 0;
   verify_left_ = 0;
-  new_runs_ = initial_runs_ = kept_runs_ = previous_runs_ = other_runs_ = Runs{};
+  new_runs_ = initial_runs_ = kept_runs_ = previous_runs_ = other_runs_ = warmup_runs_ = Runs{};
   phase_ = Phase::kNone;
   window_.assign(static_cast<size_t>(settings_.guard.watch_trials), 0.0);
   window_count_ = 0;
@@ -442,8 +442,8 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.accepted = true;
     out.cost = EvaluateCost(*problem_, measured).total;
     if (learner_) out.status = learner_->status();
-    // A warm-up trial ran u^0: a sample of its cost for the guard.
-    if (guard && !learner_->initialized()) initial_runs_.Add(Compared(out.judged_cost));
+    // A warm-up trial ran u^0: a sample of its cost for the guard's spread.
+    if (guard && !learner_->initialized()) warmup_runs_.Add(Compared(out.judged_cost));
   } else if (!learner_->initialized()) {
     // This trial ran u^0, T^0: Algorithm 1's "Initialize" (x^0, I^0, then (30)).
     if (settings_.method == Method::kMrl) {
@@ -461,9 +461,13 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
     out.predicted = 0;
     out.optimality = learner_->optimality().total;
     if (guard) {
+      // u^0's record starts here: the warm-up hops before it (a transient of u^0, e.g. after a
+      // re-solve) count towards the spread, not towards the cost a kept law is watched against.
+      warmup_runs_.Add(Compared(out.judged_cost));
+      Pool(warmup_runs_);
+      initial_runs_ = Runs{};
       initial_runs_.Add(Compared(out.judged_cost));
       initial_ = learner_->Save();
-      Pool(initial_runs_);  // warm-up runs of u^0 count towards the spread
     }
     UseLearnedLaw(learner_->NextTrial());
   } else {

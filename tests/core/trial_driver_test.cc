@@ -1011,6 +1011,34 @@ TEST_F(TrialDriverTest, TheMedianWatchLeavesAKeptLawThatMeasuresWorseThanARatio)
   }
 }
 
+// Warm-up runs of u^0 are not u^0's record (the hopper's settling hops after a re-solve of u^0,
+// issue 45): two warm-up runs from 200 x farther out cost 4e4 x u^0's cost from x0; the Initialize
+// run and every later one start at x0. The kept law on the flipped plant is left for u^0 as in the
+// test above: the watch compares the window with the Initialize run, not with a mean that the
+// transient warm-ups put 2.7e4 x higher.
+TEST_F(TrialDriverTest, TheMedianWatchJudgesAgainstTheInitializeRunNotTheWarmUps) {
+  const FlippedLq flipped;
+  ModelPlant& flipped_plant = flipped.plant;
+  TrialDriverSettings settings = MedianWatchSettings();
+  settings.warmup_trials = 3;
+  TrialDriver driver(p.problem, settings, fallback);
+  Trajectory measured;
+  std::vector<TrialOutcome> warmup;
+  for (int i = 0; i < 2; ++i) warmup.push_back(driver.RunTrial(plant, 200.0 * lq.x0, &measured));
+  const TrialOutcome initialize = driver.RunTrial(plant, lq.x0, &measured);
+  ASSERT_TRUE(warmup[0].ran_fallback && warmup[1].ran_fallback && initialize.learned);
+  ASSERT_GT(warmup[0].judged_cost, 1e4 * initialize.judged_cost) << "premise: a transient";
+  for (int i = 0; i < 60 && driver.learner()->nominal_is_initial(); ++i) {
+    driver.RunTrial(plant, lq.x0, &measured);
+  }
+  ASSERT_FALSE(driver.learner()->nominal_is_initial()) << "premise: a law is kept";
+  for (int j = 0; j < 12 && driver.reverts() == 0; ++j) {
+    driver.RunTrial(flipped_plant, lq.x0, &measured);
+  }
+  EXPECT_EQ(driver.reverts(), 1);
+  EXPECT_TRUE(driver.learner()->nominal_is_initial());
+}
+
 // The other side of the median watch's decision: the same window, but u^0's challenge runs start
 // 200 x farther out (u^0 = 0: its cost is 4e4 x its cost from x0): their median is above the
 // window's, the kept law stays and the learner goes on from it.
