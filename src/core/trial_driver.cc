@@ -465,8 +465,7 @@ TrialOutcome TrialDriver::CompleteTrial(const Trajectory& measured) {
       // re-solve) count towards the spread, not towards the cost a kept law is watched against.
       warmup_runs_.Add(Compared(out.judged_cost));
       Pool(warmup_runs_);
-      initial_runs_ = Runs{};
-      initial_runs_.Add(Compared(out.judged_cost));
+      initial_runs_.Add(Compared(out.judged_cost));  // empty until now (warm-ups went above)
       initial_ = learner_->Save();
     }
     UseLearnedLaw(learner_->NextTrial());
